@@ -1,0 +1,155 @@
+# raybundle: one non-recursive GNU Makefile. `make` builds build/raybundle and
+# build/libraybundle.a (SPIR-V included); `make check` runs every test; see README.md.
+
+PREFIX ?= /usr/local
+DESTDIR ?=
+BINDIR ?= $(PREFIX)/bin
+MANDIR ?= $(PREFIX)/share/man
+DATADIR ?= $(PREFIX)/share/raybundle
+PKG_CONFIG ?= pkg-config
+GLSLANG ?= glslangValidator
+BUILD ?= build
+
+CC ?= cc
+CXX ?= c++
+CFLAGS ?= -O2 -g
+CXXFLAGS ?= -O2 -g
+
+ifneq ($(V),1)
+Q := @
+endif
+
+PKGS := vulkan OpenImageIO OpenColorIO yaml-0.1 tinygltf
+# Deferred (=), so a fresh machine gets them after scripts/install-deps.sh has run.
+PKG_CFLAGS = $(shell $(PKG_CONFIG) --cflags $(PKGS) 2>/dev/null)
+PKG_LIBS = $(shell $(PKG_CONFIG) --libs $(PKGS) 2>/dev/null) -lembree3 -lpthread -lm
+
+WARN := -Wall -Wextra -Wpedantic -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Werror=vla
+CXXWARN := -Wall -Wextra
+ifneq ($(CI),)
+WARN += -Werror
+CXXWARN += -Werror
+endif
+ifeq ($(SANITIZE),1)
+SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer
+endif
+
+DEPFLAGS = -MMD -MP
+ALL_CPPFLAGS = -Ilib -I$(BUILD)/shaders -Ishaders/common -D_POSIX_C_SOURCE=200809L \
+	-DRB_DATADIR='"$(DATADIR)"' $(CPPFLAGS)
+ALL_CFLAGS = -std=c11 $(WARN) $(DEPFLAGS) $(PKG_CFLAGS) $(SANFLAGS) $(CFLAGS)
+ALL_CXXFLAGS = -std=c++17 $(CXXWARN) $(DEPFLAGS) $(PKG_CFLAGS) $(SANFLAGS) $(CXXFLAGS)
+ALL_LDFLAGS = $(SANFLAGS) $(LDFLAGS)
+
+LIB_C := $(sort $(wildcard lib/*/*.c))
+LIB_CXX := $(sort $(wildcard lib/*/*.cpp))
+CMD_C := $(sort $(wildcard cmd/*.c))
+LIB_OBJ := $(LIB_C:%.c=$(BUILD)/%.o) $(LIB_CXX:%.cpp=$(BUILD)/%.o)
+CMD_OBJ := $(CMD_C:%.c=$(BUILD)/%.o)
+
+SHADERS := $(sort $(wildcard shaders/*.vert shaders/*.frag shaders/*.comp shaders/*.geom))
+SPV_H := $(SHADERS:shaders/%=$(BUILD)/shaders/%.h)
+
+UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))
+UNIT_BIN := $(UNIT_SRC:tests/unit/%.c=$(BUILD)/tests/%)
+
+TOOL_SRC := $(sort $(wildcard tests/tools/*.c))
+TOOL_BIN := $(TOOL_SRC:tests/tools/%.c=$(BUILD)/tests/tools/%)
+
+DEPS := $(LIB_OBJ:.o=.d) $(CMD_OBJ:.o=.d) $(UNIT_BIN:=.d) $(TOOL_BIN:=.d) \
+	$(SPV_H:=.d)
+
+DEPS_STAMP := $(BUILD)/.deps-ok
+
+.PHONY: all test check bench demo install uninstall clean lint format update-golden deps
+all: $(BUILD)/raybundle
+
+# The one place missing Debian packages get installed (scripts/install-deps.sh).
+deps $(DEPS_STAMP): scripts/install-deps.sh
+	$(Q)scripts/install-deps.sh
+	$(Q)mkdir -p $(BUILD) && touch $(DEPS_STAMP)
+
+# Rebuild everything when the flags change.
+$(BUILD)/.flags: FORCE
+	$(Q)mkdir -p $(BUILD)
+	$(Q)echo '$(CC) $(CXX) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(ALL_CXXFLAGS)' | cmp -s - $@ || \
+		echo '$(CC) $(CXX) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(ALL_CXXFLAGS)' > $@
+FORCE:
+
+$(BUILD)/shaders/%.h: shaders/% $(DEPS_STAMP)
+	@mkdir -p $(dir $@)
+	@echo "  GLSL    $<"
+	$(Q)$(GLSLANG) --target-env vulkan1.2 --spirv-val -Ishaders/common \
+		--depfile $@.d -x --vn rb_spv_$(subst .,_,$(notdir $<)) -o $@ $< >$@.log || \
+		{ sed -e 's/^ERROR: //' $@.log | grep -v '^$$' >&2; rm -f $@; exit 1; }
+
+$(BUILD)/%.o: %.c $(BUILD)/.flags $(DEPS_STAMP) | $(SPV_H)
+	@mkdir -p $(dir $@)
+	@echo "  CC      $<"
+	$(Q)$(CC) $(ALL_CPPFLAGS) $(ALL_CFLAGS) -c -o $@ $<
+
+$(BUILD)/%.o: %.cpp $(BUILD)/.flags $(DEPS_STAMP)
+	@mkdir -p $(dir $@)
+	@echo "  CXX     $<"
+	$(Q)$(CXX) $(ALL_CPPFLAGS) $(ALL_CXXFLAGS) -c -o $@ $<
+
+$(BUILD)/libraybundle.a: $(LIB_OBJ)
+	@echo "  AR      $@"
+	$(Q)rm -f $@ && ar rcs $@ $^
+
+$(BUILD)/raybundle: $(CMD_OBJ) $(BUILD)/libraybundle.a
+	@echo "  LINK    $@"
+	$(Q)$(CXX) $(ALL_LDFLAGS) -o $@ $(CMD_OBJ) $(BUILD)/libraybundle.a $(PKG_LIBS)
+
+$(BUILD)/tests/%: tests/unit/%.c $(BUILD)/libraybundle.a $(BUILD)/.flags
+	@mkdir -p $(dir $@)
+	@echo "  TEST    $@"
+	$(Q)$(CC) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(ALL_LDFLAGS) -o $@ $< $(BUILD)/libraybundle.a \
+		$(PKG_LIBS) -lcmocka -lstdc++
+
+$(BUILD)/tests/tools/%: tests/tools/%.c $(BUILD)/libraybundle.a $(BUILD)/.flags
+	@mkdir -p $(dir $@)
+	@echo "  TOOL    $@"
+	$(Q)$(CC) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(ALL_LDFLAGS) -o $@ $< $(BUILD)/libraybundle.a \
+		$(PKG_LIBS) -lstdc++
+
+# The demo scene's generator (tools/mkdemo.c): plain C, no library.
+$(BUILD)/mkdemo: tools/mkdemo.c $(BUILD)/.flags
+	@mkdir -p $(dir $@)
+	@echo "  CC      $@"
+	$(Q)$(CC) -std=c11 $(WARN) $(CFLAGS) -o $@ $< -lm
+
+test check: $(BUILD)/raybundle $(BUILD)/mkdemo $(UNIT_BIN) $(TOOL_BIN)
+	$(Q)BUILD=$(BUILD) tests/run.sh
+
+bench: $(BUILD)/raybundle
+	$(Q)BUILD=$(BUILD) tests/bench.sh
+
+demo: $(BUILD)/raybundle
+	$(Q)$(BUILD)/raybundle render jobs/demo.yaml --preview
+
+install: $(BUILD)/raybundle
+	install -d "$(DESTDIR)$(BINDIR)" "$(DESTDIR)$(MANDIR)/man1" "$(DESTDIR)$(MANDIR)/man5" \
+		"$(DESTDIR)$(DATADIR)/ocio"
+	install -m 0755 $(BUILD)/raybundle "$(DESTDIR)$(BINDIR)/"
+	install -m 0644 man/*.1 "$(DESTDIR)$(MANDIR)/man1/"
+	install -m 0644 man/*.5 "$(DESTDIR)$(MANDIR)/man5/"
+	install -m 0644 share/ocio/config.ocio "$(DESTDIR)$(DATADIR)/ocio/"
+
+uninstall:
+	rm -f "$(DESTDIR)$(BINDIR)/raybundle" "$(DESTDIR)$(MANDIR)/man1/raybundle.1" \
+		"$(DESTDIR)$(MANDIR)/man5/raybundle-job.5" "$(DESTDIR)$(DATADIR)/ocio/config.ocio"
+
+lint:
+	$(Q)tests/lint.sh
+
+format:
+	$(Q)clang-format -i $(LIB_C) $(CMD_C) $(wildcard lib/*/*.h) $(UNIT_SRC)
+
+update-golden: $(BUILD)/raybundle
+	$(Q)BUILD=$(BUILD) tests/update-golden.sh
+
+clean:
+	rm -rf $(BUILD)
+
+-include $(DEPS)

@@ -1,0 +1,21 @@
+/* The subcommands of the raybundle program, and what they share. */
+#ifndef RB_CMD_CMD_H
+#define RB_CMD_CMD_H
+
+#include "core/core.h"
+
+enum rb_exit {
+    RB_EXIT_OK = 0,
+    RB_EXIT_FAILED = 1, /* rendering failed */
+    RB_EXIT_USAGE = 2,  /* bad usage or bad job */
+    RB_EXIT_NODEVICE = 3,
+};
+
+int cmd_render(int argc, char **argv);
+int cmd_info(int argc, char **argv);
+int cmd_help(int argc, char **argv);
+
+/* Prints "raybundle: error: <msg>" to stderr. */
+void cmd_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+
+#endif

@@ -1,0 +1,145 @@
+/* Core services every module uses: status codes and error messages, logging, small math,
+ * hashing. Depends on nothing but libc. */
+#ifndef RB_CORE_CORE_H
+#define RB_CORE_CORE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define RB_VERSION "0.1.0"
+
+/* ---- errors ------------------------------------------------------------------------------ */
+
+enum rb_status {
+    RB_OK = 0,
+    RB_E_INVALID,     /* bad argument or bad input data */
+    RB_E_NOMEM,
+    RB_E_IO,
+    RB_E_PARSE,       /* a job file or scene that does not parse */
+    RB_E_VULKAN,
+    RB_E_NODEVICE,    /* no usable Vulkan device */
+    RB_E_UNSUPPORTED, /* valid input using something raybundle does not implement */
+    RB_E_EXTERNAL,    /* an error reported by a C++ library through a shim */
+    RB_E_INTERRUPTED, /* the user asked us to stop */
+    RB_E_OVERFLOW,    /* a fixed-size buffer was too small; never silently truncated */
+};
+
+/* The message of the innermost failure, with context prepended by callers. */
+struct rb_err {
+    enum rb_status status;
+    char msg[512];
+};
+
+#define RB_ERR_INIT {RB_OK, {0}}
+
+/* Stores a formatted message in err (which may be NULL) and returns code. */
+enum rb_status rb_errf(struct rb_err *err, enum rb_status code, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+/* Prepends "<context>: " to err's message. */
+void rb_err_prefix(struct rb_err *err, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* A short name for a status ("io error", ...). */
+const char *rb_status_name(enum rb_status st);
+
+/* Always-on check for states that mean raybundle's own code is wrong. */
+#define RB_BUG(...) rb_bug(__FILE__, __LINE__, __VA_ARGS__)
+_Noreturn void rb_bug(const char *file, int line, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+/* ---- logging ----------------------------------------------------------------------------- */
+
+enum rb_log_level { RB_LOG_ERROR = 0, RB_LOG_WARN, RB_LOG_INFO, RB_LOG_DEBUG };
+
+typedef void (*rb_log_fn)(enum rb_log_level level, const char *msg, void *user);
+
+/* Replaces the log sink (NULL restores the default, which writes to stderr). Not thread-safe:
+ * set it before starting work. */
+void rb_log_set_sink(rb_log_fn fn, void *user);
+void rb_log_set_level(enum rb_log_level max_level);
+enum rb_log_level rb_log_get_level(void);
+void rb_log(enum rb_log_level level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Number of warnings logged so far (for tests and exit summaries). */
+unsigned rb_log_warning_count(void);
+
+/* ---- memory and strings ------------------------------------------------------------------- */
+
+/* Duplicates s (NULL gives NULL). */
+char *rb_strdup(const char *s);
+/* Copies at most size-1 bytes and always terminates. Returns strlen(src). */
+size_t rb_strlcpy(char *dst, const char *src, size_t size);
+/* Reads a whole file into a new NUL-terminated buffer. */
+enum rb_status rb_read_file(const char *path, char **out, size_t *out_size, struct rb_err *err);
+
+/* ---- hashing ----------------------------------------------------------------------------- */
+
+/* FNV-1a, 64 bits; chain by passing the previous value as seed (start with RB_HASH_SEED). */
+#define RB_HASH_SEED 0xcbf29ce484222325ull
+uint64_t rb_hash64(const void *data, size_t size, uint64_t seed);
+
+/* ---- math ---------------------------------------------------------------------------------- */
+
+#define RB_PI 3.14159265358979323846f
+
+struct rb_vec3 {
+    float x, y, z;
+};
+struct rb_vec4 {
+    float x, y, z, w;
+};
+/* Quaternion (x, y, z, w), w the scalar part, as glTF stores it. */
+struct rb_quat {
+    float x, y, z, w;
+};
+/* Column-major 4x4 (m[col][row]), as glTF and GLSL store it. */
+struct rb_mat4 {
+    float m[4][4];
+};
+
+static inline struct rb_vec3 rb_v3(float x, float y, float z)
+{
+    return (struct rb_vec3){x, y, z};
+}
+struct rb_vec3 rb_v3_add(struct rb_vec3 a, struct rb_vec3 b);
+struct rb_vec3 rb_v3_sub(struct rb_vec3 a, struct rb_vec3 b);
+struct rb_vec3 rb_v3_scale(struct rb_vec3 a, float s);
+struct rb_vec3 rb_v3_lerp(struct rb_vec3 a, struct rb_vec3 b, float t);
+float rb_v3_dot(struct rb_vec3 a, struct rb_vec3 b);
+struct rb_vec3 rb_v3_cross(struct rb_vec3 a, struct rb_vec3 b);
+float rb_v3_length(struct rb_vec3 a);
+/* Returns a unit vector, or a itself when its length is zero. */
+struct rb_vec3 rb_v3_normalize(struct rb_vec3 a);
+struct rb_vec3 rb_v3_min(struct rb_vec3 a, struct rb_vec3 b);
+struct rb_vec3 rb_v3_max(struct rb_vec3 a, struct rb_vec3 b);
+
+struct rb_quat rb_quat_identity(void);
+struct rb_quat rb_quat_normalize(struct rb_quat q);
+/* Shortest-arc spherical interpolation; falls back to nlerp for nearly equal inputs. */
+struct rb_quat rb_quat_slerp(struct rb_quat a, struct rb_quat b, float t);
+struct rb_quat rb_quat_mul(struct rb_quat a, struct rb_quat b);
+struct rb_vec3 rb_quat_rotate(struct rb_quat q, struct rb_vec3 v);
+
+struct rb_mat4 rb_mat4_identity(void);
+struct rb_mat4 rb_mat4_mul(const struct rb_mat4 *a, const struct rb_mat4 *b);
+/* T * R * S, the glTF node transform. */
+struct rb_mat4 rb_mat4_trs(struct rb_vec3 t, struct rb_quat r, struct rb_vec3 s);
+/* General inverse; returns identity for a singular matrix and sets *ok to false when ok. */
+struct rb_mat4 rb_mat4_inverse(const struct rb_mat4 *a, bool *ok);
+struct rb_mat4 rb_mat4_transpose(const struct rb_mat4 *a);
+struct rb_vec3 rb_mat4_point(const struct rb_mat4 *a, struct rb_vec3 p);
+struct rb_vec3 rb_mat4_dir(const struct rb_mat4 *a, struct rb_vec3 d);
+struct rb_vec4 rb_mat4_vec4(const struct rb_mat4 *a, struct rb_vec4 v);
+/* Right-handed view matrix looking from eye at target (camera looks down -Z, as glTF). */
+struct rb_mat4 rb_mat4_look_at(struct rb_vec3 eye, struct rb_vec3 target, struct rb_vec3 up);
+/* Vulkan-style perspective: depth 0..1, y down in NDC flipped so +Y is up on screen. */
+struct rb_mat4 rb_mat4_perspective(float fov_y_rad, float aspect, float z_near, float z_far);
+struct rb_mat4 rb_mat4_ortho(float left, float right, float bottom, float top, float z_near,
+                             float z_far);
+
+static inline float rb_clampf(float x, float lo, float hi)
+{
+    return x < lo ? lo : (x > hi ? hi : x);
+}
+
+#endif

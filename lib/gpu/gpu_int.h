@@ -1,0 +1,11 @@
+/* Private to lib/gpu. */
+#ifndef RB_GPU_GPU_INT_H
+#define RB_GPU_GPU_INT_H
+
+#include "gpu/gpu.h"
+
+enum rb_status rb_gpu_alloc(struct rb_gpu *gpu, VkMemoryRequirements req,
+                            VkMemoryPropertyFlags want, VkMemoryPropertyFlags need,
+                            const char *what, VkDeviceMemory *out, struct rb_err *err);
+
+#endif

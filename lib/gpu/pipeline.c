@@ -1,0 +1,216 @@
+/* Pipeline layouts with push descriptors, compute and graphics pipelines (dynamic rendering),
+ * and the push-descriptor write list a pass fills at record time. */
+#include "gpu/gpu.h"
+
+static enum rb_status make_module(struct rb_gpu *gpu, const uint32_t *spv, size_t bytes,
+                                  const char *name, VkShaderModule *out, struct rb_err *err)
+{
+    VkShaderModuleCreateInfo ci = {
+        .sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
+        .codeSize = bytes,
+        .pCode = spv,
+    };
+    VkResult vr = vkCreateShaderModule(gpu->device, &ci, NULL, out);
+    if (vr < 0)
+        return rb_gpu_fail(err, vr, "vkCreateShaderModule", name);
+    return RB_OK;
+}
+
+enum rb_status rb_gpu_layout_init(struct rb_gpu *gpu, const VkDescriptorType *types,
+                                  uint32_t count, uint32_t push_bytes, struct rb_gpu_layout *out,
+                                  struct rb_err *err)
+{
+    VkDescriptorSetLayoutBinding bindings[16];
+    if (count > 16)
+        RB_BUG("%u bindings", count);
+    for (uint32_t i = 0; i < count; i++)
+        bindings[i] = (VkDescriptorSetLayoutBinding){
+            .binding = i,
+            .descriptorType = types[i],
+            .descriptorCount = 1,
+            .stageFlags = VK_SHADER_STAGE_ALL,
+        };
+    struct rb_gpu_layout l = {0};
+    VkDescriptorSetLayoutCreateInfo sci = {
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
+        .flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR,
+        .bindingCount = count,
+        .pBindings = bindings,
+    };
+    VkResult vr = vkCreateDescriptorSetLayout(gpu->device, &sci, NULL, &l.set_layout);
+    if (vr < 0)
+        return rb_gpu_fail(err, vr, "vkCreateDescriptorSetLayout", NULL);
+    VkPushConstantRange pc = {.stageFlags = VK_SHADER_STAGE_ALL, .offset = 0, .size = push_bytes};
+    VkPipelineLayoutCreateInfo pci = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
+        .setLayoutCount = 1,
+        .pSetLayouts = &l.set_layout,
+        .pushConstantRangeCount = push_bytes ? 1 : 0,
+        .pPushConstantRanges = &pc,
+    };
+    if ((vr = vkCreatePipelineLayout(gpu->device, &pci, NULL, &l.pipeline_layout)) < 0) {
+        vkDestroyDescriptorSetLayout(gpu->device, l.set_layout, NULL);
+        return rb_gpu_fail(err, vr, "vkCreatePipelineLayout", NULL);
+    }
+    *out = l;
+    return RB_OK;
+}
+
+void rb_gpu_layout_release(struct rb_gpu *gpu, struct rb_gpu_layout *layout)
+{
+    if (!layout)
+        return;
+    if (layout->pipeline_layout)
+        vkDestroyPipelineLayout(gpu->device, layout->pipeline_layout, NULL);
+    if (layout->set_layout)
+        vkDestroyDescriptorSetLayout(gpu->device, layout->set_layout, NULL);
+    *layout = (struct rb_gpu_layout){0};
+}
+
+enum rb_status rb_gpu_compute_pipeline(struct rb_gpu *gpu, const uint32_t *spv, size_t spv_bytes,
+                                       VkPipelineLayout layout, const char *debug_name,
+                                       VkPipeline *out, struct rb_err *err)
+{
+    VkShaderModule mod = VK_NULL_HANDLE;
+    enum rb_status st = make_module(gpu, spv, spv_bytes, debug_name, &mod, err);
+    if (st)
+        return st;
+    VkComputePipelineCreateInfo ci = {
+        .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
+        .stage = {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
+                  .stage = VK_SHADER_STAGE_COMPUTE_BIT,
+                  .module = mod,
+                  .pName = "main"},
+        .layout = layout,
+    };
+    VkResult vr = vkCreateComputePipelines(gpu->device, VK_NULL_HANDLE, 1, &ci, NULL, out);
+    vkDestroyShaderModule(gpu->device, mod, NULL);
+    if (vr < 0)
+        return rb_gpu_fail(err, vr, "vkCreateComputePipelines", debug_name);
+    rb_gpu_name(gpu, VK_OBJECT_TYPE_PIPELINE, (uint64_t)*out, debug_name);
+    return RB_OK;
+}
+
+enum rb_status rb_gpu_graphics_pipeline(struct rb_gpu *gpu, const struct rb_gpu_graphics_desc *d,
+                                        VkPipeline *out, struct rb_err *err)
+{
+    VkShaderModule vs = VK_NULL_HANDLE, fs = VK_NULL_HANDLE;
+    enum rb_status st = make_module(gpu, d->vert, d->vert_bytes, d->debug_name, &vs, err);
+    if (st == RB_OK)
+        st = make_module(gpu, d->frag, d->frag_bytes, d->debug_name, &fs, err);
+    if (st)
+        goto out;
+    VkPipelineShaderStageCreateInfo stages[2] = {
+        {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
+         .stage = VK_SHADER_STAGE_VERTEX_BIT,
+         .module = vs,
+         .pName = "main"},
+        {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
+         .stage = VK_SHADER_STAGE_FRAGMENT_BIT,
+         .module = fs,
+         .pName = "main"},
+    };
+    VkPipelineVertexInputStateCreateInfo vi = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+    VkPipelineInputAssemblyStateCreateInfo ia = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO,
+        .topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST};
+    VkPipelineViewportStateCreateInfo vp = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO,
+        .viewportCount = 1,
+        .scissorCount = 1};
+    VkPipelineRasterizationStateCreateInfo rs = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO,
+        .polygonMode = VK_POLYGON_MODE_FILL,
+        .cullMode = d->cull,
+        .frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE,
+        .depthBiasEnable = d->has_depth_bias,
+        .lineWidth = 1.0f};
+    VkPipelineMultisampleStateCreateInfo ms = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO,
+        .rasterizationSamples = VK_SAMPLE_COUNT_1_BIT};
+    bool has_depth = d->depth_format != VK_FORMAT_UNDEFINED;
+    VkPipelineDepthStencilStateCreateInfo ds = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO,
+        .depthTestEnable = has_depth,
+        .depthWriteEnable = has_depth,
+        .depthCompareOp = VK_COMPARE_OP_LESS};
+    VkPipelineColorBlendAttachmentState blend[8] = {{0}};
+    for (uint32_t i = 0; i < d->color_count && i < 8; i++)
+        blend[i].colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
+                                  VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+    VkPipelineColorBlendStateCreateInfo cb = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO,
+        .attachmentCount = d->color_count,
+        .pAttachments = blend};
+    VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR,
+                            VK_DYNAMIC_STATE_DEPTH_BIAS};
+    VkPipelineDynamicStateCreateInfo dy = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
+        .dynamicStateCount = d->has_depth_bias ? 3 : 2,
+        .pDynamicStates = dyn};
+    VkPipelineRenderingCreateInfo ri = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO,
+        .colorAttachmentCount = d->color_count,
+        .pColorAttachmentFormats = d->color_formats,
+        .depthAttachmentFormat = d->depth_format};
+    VkGraphicsPipelineCreateInfo ci = {
+        .sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO,
+        .pNext = &ri,
+        .stageCount = 2,
+        .pStages = stages,
+        .pVertexInputState = &vi,
+        .pInputAssemblyState = &ia,
+        .pViewportState = &vp,
+        .pRasterizationState = &rs,
+        .pMultisampleState = &ms,
+        .pDepthStencilState = &ds,
+        .pColorBlendState = &cb,
+        .pDynamicState = &dy,
+        .layout = d->layout};
+    VkResult vr = vkCreateGraphicsPipelines(gpu->device, VK_NULL_HANDLE, 1, &ci, NULL, out);
+    if (vr < 0)
+        st = rb_gpu_fail(err, vr, "vkCreateGraphicsPipelines", d->debug_name);
+    else
+        rb_gpu_name(gpu, VK_OBJECT_TYPE_PIPELINE, (uint64_t)*out, d->debug_name);
+out:
+    if (vs)
+        vkDestroyShaderModule(gpu->device, vs, NULL);
+    if (fs)
+        vkDestroyShaderModule(gpu->device, fs, NULL);
+    return st;
+}
+
+void rb_gpu_bind_buffer(struct rb_gpu_bindings *b, VkDescriptorType type,
+                        const struct rb_gpu_buffer *buf)
+{
+    uint32_t i = b->count++;
+    b->buffers[i] = (VkDescriptorBufferInfo){buf->buffer, 0, VK_WHOLE_SIZE};
+    b->writes[i] = (VkWriteDescriptorSet){
+        .sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
+        .dstBinding = i,
+        .descriptorCount = 1,
+        .descriptorType = type,
+        .pBufferInfo = &b->buffers[i],
+    };
+}
+
+void rb_gpu_bind_image(struct rb_gpu_bindings *b, VkDescriptorType type, VkImageView view,
+                       VkSampler sampler, VkImageLayout layout)
+{
+    uint32_t i = b->count++;
+    b->images[i] = (VkDescriptorImageInfo){sampler, view, layout};
+    b->writes[i] = (VkWriteDescriptorSet){
+        .sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
+        .dstBinding = i,
+        .descriptorCount = 1,
+        .descriptorType = type,
+        .pImageInfo = &b->images[i],
+    };
+}
+
+void rb_gpu_push_bindings(struct rb_gpu *gpu, VkCommandBuffer cmd, VkPipelineBindPoint point,
+                          VkPipelineLayout layout, const struct rb_gpu_bindings *b)
+{
+    gpu->push_descriptor_set(cmd, point, layout, 0, b->count, b->writes);
+}

@@ -1,0 +1,178 @@
+/* The direct integrator: animate -> gbuffer -> shadow -> direct -> output. Direct light only,
+ * the baseline the global-illumination integrators add to (DESIGN.md "direct"). */
+#include "integrators/integrators_int.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_CLIPS 64
+
+struct rb_integrator {
+    struct rb_gpu *gpu;
+    const struct rb_job *job;
+    const struct rb_scene *scene;
+    bool has_env_map;
+    uint32_t clips[MAX_CLIPS];
+    struct rb_anim_selection sel;
+    struct rb_moment cur, prev;
+    struct rb_frame frame;
+    bool has_last;
+    int last_frame; /* the frame whose vertices are in its parity's slot */
+
+    struct rb_pass_animate *animate;
+    struct rb_pass_gbuffer *gbuffer;
+    struct rb_pass_shadow *shadow;
+    struct rb_pass_direct *direct;
+    struct rb_pass_output *output;
+};
+
+static unsigned slot_of(int frame)
+{
+    return (unsigned)frame & 1u;
+}
+
+enum rb_status rb_integrator_create(const struct rb_integrator_desc *desc,
+                                    struct rb_integrator **out, struct rb_err *err)
+{
+    enum rb_integrator_kind kind = desc->job->integrator.name;
+    if (kind != RB_INTEGRATOR_DIRECT && kind != RB_INTEGRATOR_DEFAULT)
+        return rb_errf(err, RB_E_UNSUPPORTED, "integrator '%s' is not implemented yet",
+                       rb_integrator_name(kind));
+    struct rb_integrator *it = calloc(1, sizeof(*it));
+    if (!it)
+        return rb_errf(err, RB_E_NOMEM, "out of memory");
+    it->gpu = desc->gpu;
+    it->job = desc->job;
+    it->scene = desc->scene;
+    it->has_env_map = desc->env_rgba != NULL;
+    uint32_t clip_count = 0;
+    enum rb_status st =
+        rb_scene_select_clips(desc->scene, desc->job, it->clips, MAX_CLIPS, &clip_count, err);
+    if (st)
+        goto fail;
+    it->sel = (struct rb_anim_selection){
+        .clips = it->clips,
+        .clip_count = clip_count,
+        .offset_s = desc->job->animation.offset_s,
+        .speed = desc->job->animation.speed,
+        .loop = desc->job->animation.loop,
+    };
+    if ((st = rb_scene_pose_create(desc->scene, &it->cur.pose, err)) ||
+        (st = rb_scene_pose_create(desc->scene, &it->prev.pose, err)))
+        goto fail;
+    double t0 = desc->job->frame_start / desc->job->rate_fps;
+    if ((st = rb_moment_evaluate(desc->job, desc->scene, &it->sel, t0, &it->cur, err)))
+        goto fail;
+    if ((st = rb_frame_init(desc->gpu, desc, &it->cur, &it->frame, err)))
+        goto fail;
+    if ((st = rb_pass_animate_create(desc->gpu, &it->animate, err)) ||
+        (st = rb_pass_gbuffer_create(desc->gpu, &it->gbuffer, err)) ||
+        (st = rb_pass_shadow_create(desc->gpu, &it->shadow, err)) ||
+        (st = rb_pass_direct_create(desc->gpu, &it->direct, err)) ||
+        (st = rb_pass_output_create(desc->gpu, &it->output, err)))
+        goto fail;
+    *out = it;
+    return RB_OK;
+fail:
+    rb_integrator_destroy(it);
+    return st;
+}
+
+enum rb_status rb_integrator_render(struct rb_integrator *it, int frame_index,
+                                    struct rb_frame_result *out, struct rb_err *err)
+{
+    struct rb_gpu *gpu = it->gpu;
+    struct rb_frame *frame = &it->frame;
+    double rate = it->job->rate_fps;
+    double t = frame_index / rate, t_prev = (frame_index - 1) / rate;
+    struct rb_frame_slot *cur = &frame->slots[slot_of(frame_index)];
+    struct rb_frame_slot *prev = &frame->slots[slot_of(frame_index - 1)];
+    /* The previous frame's vertices are recomputed unless this run just made them; both ways
+     * give the same bits, so the output does not depend on how the range was chunked. */
+    bool need_prev = !(it->has_last && it->last_frame == frame_index - 1);
+
+    enum rb_status st = rb_moment_evaluate(it->job, it->scene, &it->sel, t_prev, &it->prev, err);
+    if (st == RB_OK)
+        st = rb_moment_evaluate(it->job, it->scene, &it->sel, t, &it->cur, err);
+    if (st)
+        return st;
+    if (it->cur.light_count != frame->light_count)
+        return rb_errf(err, RB_E_INVALID, "the number of lights changed from %u to %u",
+                       frame->light_count, it->cur.light_count);
+    if ((st = rb_gpu_begin(gpu, err)))
+        return st;
+    VkCommandBuffer cmd = gpu->cmd;
+
+    rb_gpu_pass_begin(gpu, cmd, "animate");
+    if (need_prev) {
+        rb_frame_write_slot(frame, it->scene, &it->prev, prev);
+        rb_pass_animate_record(it->animate, cmd, frame, prev);
+    }
+    rb_frame_write_slot(frame, it->scene, &it->cur, cur);
+    rb_pass_animate_record(it->animate, cmd, frame, cur);
+    rb_gpu_barrier(cmd);
+    rb_gpu_pass_end(gpu, cmd);
+    it->has_last = false; /* until this frame completes */
+
+    rb_frame_write_globals(frame, it->job, frame_index, &it->cur, &it->prev, it->has_env_map);
+
+    rb_gpu_pass_begin(gpu, cmd, "gbuffer");
+    rb_pass_gbuffer_record(it->gbuffer, cmd, frame, cur, prev);
+    rb_gpu_barrier(cmd);
+    rb_gpu_pass_end(gpu, cmd);
+
+    rb_gpu_pass_begin(gpu, cmd, "shadow");
+    rb_pass_shadow_record(it->shadow, cmd, frame, cur);
+    rb_gpu_barrier(cmd);
+    rb_gpu_pass_end(gpu, cmd);
+
+    rb_gpu_pass_begin(gpu, cmd, "direct");
+    rb_pass_direct_record(it->direct, cmd, frame);
+    rb_gpu_barrier(cmd);
+    rb_gpu_pass_end(gpu, cmd);
+
+    rb_gpu_pass_begin(gpu, cmd, "output");
+    rb_pass_output_record(it->output, cmd, frame);
+    rb_gpu_pass_end(gpu, cmd);
+
+    if ((st = rb_gpu_submit_wait(gpu, err)))
+        return st;
+    it->has_last = true;
+    it->last_frame = frame_index;
+
+    double ms[RB_GPU_MAX_PASSES];
+    if ((st = rb_gpu_pass_times(gpu, ms, err)))
+        return st;
+    memset(out, 0, sizeof(*out));
+    out->frame = frame_index;
+    out->time_s = t;
+    out->width_px = frame->width_px;
+    out->height_px = frame->height_px;
+    out->pixels = frame->readback.mapped;
+    out->pass_count = gpu->pass_count;
+    for (uint32_t i = 0; i < gpu->pass_count; i++) {
+        rb_strlcpy(out->passes[i].name, gpu->pass_names[i], sizeof(out->passes[i].name));
+        out->passes[i].gpu_ms = ms[i];
+    }
+    struct rb_mat4 proj = rb_frame_projection(frame, &it->cur.camera);
+    out->world_to_camera = it->cur.camera.world_to_camera;
+    out->world_to_ndc = rb_mat4_mul(&proj, &it->cur.camera.world_to_camera);
+    return RB_OK;
+}
+
+void rb_integrator_destroy(struct rb_integrator *it)
+{
+    if (!it)
+        return;
+    if (it->gpu && it->gpu->device)
+        vkDeviceWaitIdle(it->gpu->device);
+    rb_pass_output_destroy(it->output);
+    rb_pass_direct_destroy(it->direct);
+    rb_pass_shadow_destroy(it->shadow);
+    rb_pass_gbuffer_destroy(it->gbuffer);
+    rb_pass_animate_destroy(it->animate);
+    rb_frame_release(it->gpu, &it->frame);
+    rb_scene_pose_destroy(it->prev.pose);
+    rb_scene_pose_destroy(it->cur.pose);
+    free(it);
+}

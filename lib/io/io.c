@@ -1,0 +1,783 @@
+/* Files in and out, the C side: frame paths, sidecar names, atomic writes, the EXR channel and
+ * metadata policy, the preview's quantization, and the timing sidecar's JSON. The libraries
+ * themselves sit behind oiio_shim.cpp and ocio_shim.cpp, which decide nothing. */
+#include "io/io.h"
+
+#include "io/ocio_shim.h"
+#include "io/oiio_shim.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#ifndef RB_DATADIR
+#define RB_DATADIR "/usr/local/share/raybundle"
+#endif
+
+/* Rec.709 / sRGB primaries and D65 white, as OpenEXR's chromaticities: red, green, blue, white
+ * (x, y). */
+static const float rec709_chromaticities[8] = {0.64f, 0.33f, 0.30f,   0.60f,
+                                               0.15f, 0.06f, 0.3127f, 0.3290f};
+
+/* ---- paths ------------------------------------------------------------------------------ */
+
+/* The start of the file name in path (after the last '/'). */
+static const char *base_name(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    return slash ? slash + 1 : path;
+}
+
+/* The final extension's dot in path's file name, or the terminating NUL when there is none.
+ * A leading dot (".hidden") is part of the name, not an extension. */
+static const char *extension(const char *path)
+{
+    const char *base = base_name(path);
+    const char *dot = strrchr(base, '.');
+    return dot && dot != base ? dot : path + strlen(path);
+}
+
+enum rb_status rb_io_frame_path(const char *pattern, int frame, char *out, size_t size,
+                                struct rb_err *err)
+{
+    if (!pattern || !*pattern)
+        return rb_errf(err, RB_E_INVALID, "frame path: empty pattern");
+    if (!out || !size)
+        return rb_errf(err, RB_E_INVALID, "frame path for '%s': no output buffer", pattern);
+
+    int n;
+    const char *last = strrchr(pattern, '#');
+    if (last) {
+        const char *first = last;
+        while (first > pattern && first[-1] == '#')
+            first--;
+        int width = (int)(last - first + 1);
+        /* %0*d pads after the sign: frame -12 in "####" gives "-012". */
+        n = snprintf(out, size, "%.*s%0*d%s", (int)(first - pattern), pattern, width, frame,
+                     last + 1);
+    } else {
+        const char *ext = extension(pattern);
+        n = snprintf(out, size, "%.*s.%04d%s", (int)(ext - pattern), pattern, frame, ext);
+    }
+    if (n < 0 || (size_t)n >= size) {
+        out[0] = '\0';
+        return rb_errf(err, RB_E_OVERFLOW, "frame path for '%s' is longer than %zu bytes",
+                       pattern, size - 1);
+    }
+    return RB_OK;
+}
+
+enum rb_status rb_io_sidecar_path(const char *exr_path, const char *suffix, char *out,
+                                  size_t size, struct rb_err *err)
+{
+    if (!exr_path || !*exr_path)
+        return rb_errf(err, RB_E_INVALID, "sidecar path: empty image path");
+    if (!out || !size)
+        return rb_errf(err, RB_E_INVALID, "sidecar path for '%s': no output buffer", exr_path);
+    const char *ext = extension(exr_path);
+    int n = snprintf(out, size, "%.*s%s", (int)(ext - exr_path), exr_path, suffix ? suffix : "");
+    if (n < 0 || (size_t)n >= size) {
+        out[0] = '\0';
+        return rb_errf(err, RB_E_OVERFLOW, "sidecar path for '%s' is longer than %zu bytes",
+                       exr_path, size - 1);
+    }
+    return RB_OK;
+}
+
+/* mkdir that accepts an existing directory (and only a directory). */
+static enum rb_status make_dir(const char *dir, struct rb_err *err)
+{
+    if (mkdir(dir, 0777) == 0)
+        return RB_OK;
+    int e = errno;
+    struct stat st;
+    if (e == EEXIST && stat(dir, &st) == 0) {
+        if (S_ISDIR(st.st_mode))
+            return RB_OK;
+        return rb_errf(err, RB_E_IO, "cannot create directory '%s': %s", dir, strerror(ENOTDIR));
+    }
+    return rb_errf(err, RB_E_IO, "cannot create directory '%s': %s", dir, strerror(e));
+}
+
+enum rb_status rb_io_make_parent_dirs(const char *path, struct rb_err *err)
+{
+    if (!path || !*path)
+        return rb_errf(err, RB_E_INVALID, "make directories: empty path");
+    const char *slash = strrchr(path, '/');
+    if (!slash || slash == path)
+        return RB_OK; /* "file" or "/file": the parent is "." or "/" */
+
+    enum rb_status st = RB_OK;
+    char *dir = rb_strdup(path);
+    if (!dir)
+        return rb_errf(err, RB_E_NOMEM, "make directories for '%s': out of memory", path);
+    dir[slash - path] = '\0';
+    /* Each prefix ending before a '/', then the whole directory. */
+    for (char *p = dir + 1; *p; p++) {
+        if (*p != '/' || p[-1] == '/')
+            continue;
+        *p = '\0';
+        st = make_dir(dir, err);
+        *p = '/';
+        if (st)
+            goto out;
+    }
+    st = make_dir(dir, err);
+out:
+    free(dir);
+    return st;
+}
+
+/* "<path>.tmp.<pid><ext>": beside path, so the final rename stays on one file system. */
+static char *temp_path(const char *path, const char *ext)
+{
+    size_t n = strlen(path) + strlen(ext) + 32;
+    char *tmp = malloc(n);
+    if (tmp)
+        snprintf(tmp, n, "%s.tmp.%ld%s", path, (long)getpid(), ext);
+    return tmp;
+}
+
+/* fsync a file that someone else (OpenImageIO) wrote and closed. */
+static int fsync_path(const char *path)
+{
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return -1;
+    int r = fsync(fd);
+    int e = errno;
+    close(fd);
+    errno = e;
+    return r;
+}
+
+enum rb_status rb_io_write_atomic(const char *path, const void *data, size_t size,
+                                  struct rb_err *err)
+{
+    if (!path || !*path)
+        return rb_errf(err, RB_E_INVALID, "write: empty path");
+    if (!data && size)
+        return rb_errf(err, RB_E_INVALID, "cannot write '%s': no data", path);
+
+    enum rb_status st = RB_OK;
+    int fd = -1, e = 0;
+    char *tmp = temp_path(path, "");
+    if (!tmp)
+        return rb_errf(err, RB_E_NOMEM, "cannot write '%s': out of memory", path);
+
+    fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (fd < 0) {
+        e = errno;
+        goto fail;
+    }
+    const char *p = data;
+    for (size_t left = size; left;) {
+        ssize_t w = write(fd, p, left);
+        if (w < 0 && errno == EINTR)
+            continue;
+        if (w < 0) {
+            e = errno;
+            goto fail;
+        }
+        p += w;
+        left -= (size_t)w;
+    }
+    if (fsync(fd) != 0) {
+        e = errno;
+        goto fail;
+    }
+    int r = close(fd);
+    fd = -1;
+    if (r != 0 || rename(tmp, path) != 0) {
+        e = errno;
+        goto fail;
+    }
+    goto out;
+fail:
+    if (fd >= 0)
+        close(fd);
+    unlink(tmp);
+    st = rb_errf(err, RB_E_IO, "cannot write '%s': %s", path, strerror(e));
+out:
+    free(tmp);
+    return st;
+}
+
+/* Writes an image through the OIIO shim to a temporary name with the file's real extension
+ * (OIIO picks writers by name), fsyncs it, and renames it over path. */
+static enum rb_status write_image_atomic(const char *path, const char *ext,
+                                         struct rb_oiio_write_desc *desc, struct rb_err *err)
+{
+    enum rb_status st = RB_OK;
+    char msg[400];
+    char *tmp = temp_path(path, ext);
+    if (!tmp)
+        return rb_errf(err, RB_E_NOMEM, "cannot write '%s': out of memory", path);
+    desc->path = tmp;
+    if (rb_oiio_write(desc, msg, sizeof(msg)) != RB_OIIO_OK) {
+        unlink(tmp);
+        st = rb_errf(err, RB_E_EXTERNAL, "cannot write '%s': %s", path, msg);
+        goto out;
+    }
+    if (fsync_path(tmp) != 0 || rename(tmp, path) != 0) {
+        int e = errno;
+        unlink(tmp);
+        st = rb_errf(err, RB_E_IO, "cannot write '%s': %s", path, strerror(e));
+        goto out;
+    }
+out:
+    free(tmp);
+    return st;
+}
+
+/* ---- EXR -------------------------------------------------------------------------------- */
+
+static bool is_beauty(const struct rb_io_layer *l)
+{
+    return !l->name || !*l->name;
+}
+
+/* Checks count*a*b fits in size_t and returns it, or 0 on overflow. */
+static size_t mul3(size_t count, size_t a, size_t b)
+{
+    if (a && count > SIZE_MAX / a)
+        return 0;
+    if (b && count * a > SIZE_MAX / b)
+        return 0;
+    return count * a * b;
+}
+
+enum rb_status rb_io_exr_write(const char *path, uint32_t width_px, uint32_t height_px,
+                               const struct rb_io_layer *layers, size_t layer_count,
+                               const struct rb_io_attr *attrs, size_t attr_count,
+                               struct rb_err *err)
+{
+    static const char *const rgba_names[4] = {"R", "G", "B", "A"};
+    enum rb_status st = RB_OK;
+    char **names = NULL;
+    bool *is_half = NULL;
+    float *pixels = NULL;
+    struct rb_oiio_attr *oattrs = NULL;
+    size_t *order = NULL;
+    uint32_t total = 0;
+
+    if (!path || !*path)
+        return rb_errf(err, RB_E_INVALID, "exr: empty path");
+    if (!width_px || !height_px)
+        return rb_errf(err, RB_E_INVALID, "exr '%s': empty image (%ux%u)", path, width_px,
+                       height_px);
+    if (!layers || !layer_count)
+        return rb_errf(err, RB_E_INVALID, "exr '%s': no layers", path);
+    for (size_t i = 0; i < layer_count; i++) {
+        const struct rb_io_layer *l = &layers[i];
+        const char *ln = is_beauty(l) ? "beauty" : l->name;
+        if (l->channel_count < 1 || l->channel_count > 4)
+            return rb_errf(err, RB_E_INVALID, "exr '%s': layer '%s' has %u channels (1..4)",
+                           path, ln, l->channel_count);
+        if (!l->pixels)
+            return rb_errf(err, RB_E_INVALID, "exr '%s': layer '%s' has no pixels", path, ln);
+        if (!l->channel_names && !is_beauty(l))
+            return rb_errf(err, RB_E_INVALID, "exr '%s': layer '%s' has no channel names", path,
+                           ln);
+        for (uint32_t c = 0; l->channel_names && c < l->channel_count; c++)
+            if (!l->channel_names[c] || !*l->channel_names[c])
+                return rb_errf(err, RB_E_INVALID, "exr '%s': layer '%s' channel %u has no name",
+                               path, ln, c);
+        total += l->channel_count;
+    }
+    size_t pixel_count = (size_t)width_px * height_px;
+    size_t pixel_bytes = mul3(pixel_count, total, sizeof(float));
+    if (!pixel_bytes)
+        return rb_errf(err, RB_E_INVALID, "exr '%s': image too large", path);
+
+    names = calloc(total, sizeof(*names));
+    is_half = calloc(total, sizeof(*is_half));
+    pixels = malloc(pixel_bytes);
+    order = calloc(layer_count, sizeof(*order));
+    oattrs = calloc(attr_count + 5, sizeof(*oattrs));
+    if (!names || !is_half || !pixels || !order || !oattrs) {
+        st = rb_errf(err, RB_E_NOMEM, "exr '%s': out of memory", path);
+        goto out;
+    }
+
+    /* File order: the beauty's channels first, then the layers in the caller's order. */
+    size_t n_order = 0;
+    for (size_t i = 0; i < layer_count; i++)
+        if (is_beauty(&layers[i]))
+            order[n_order++] = i;
+    for (size_t i = 0; i < layer_count; i++)
+        if (!is_beauty(&layers[i]))
+            order[n_order++] = i;
+
+    uint32_t ch = 0;
+    for (size_t k = 0; k < layer_count; k++) {
+        const struct rb_io_layer *l = &layers[order[k]];
+        for (uint32_t c = 0; c < l->channel_count; c++, ch++) {
+            const char *cn = l->channel_names ? l->channel_names[c] : rgba_names[c];
+            size_t n = strlen(cn) + (is_beauty(l) ? 0 : strlen(l->name) + 1) + 1;
+            names[ch] = malloc(n);
+            if (!names[ch]) {
+                st = rb_errf(err, RB_E_NOMEM, "exr '%s': out of memory", path);
+                goto out;
+            }
+            if (is_beauty(l))
+                snprintf(names[ch], n, "%s", cn);
+            else
+                snprintf(names[ch], n, "%s.%s", l->name, cn);
+            for (uint32_t j = 0; j < ch; j++)
+                if (!strcmp(names[j], names[ch])) {
+                    st = rb_errf(err, RB_E_INVALID, "exr '%s': channel '%s' appears twice",
+                                 path, names[ch]);
+                    goto out;
+                }
+            is_half[ch] = l->is_half;
+            const float *src = l->pixels;
+            for (size_t p = 0; p < pixel_count; p++)
+                pixels[p * total + ch] = src[p * l->channel_count + c];
+        }
+    }
+
+    /* Our metadata first; a caller's attribute of the same name replaces it. Nothing here
+     * depends on the time or the host, so equal pixels give equal bytes. */
+    size_t na = 0;
+    oattrs[na++] = (struct rb_oiio_attr){.name = "compression", .type = RB_OIIO_ATTR_STRING,
+                                         .s = "zip"};
+    oattrs[na++] = (struct rb_oiio_attr){.name = "oiio:ColorSpace", .type = RB_OIIO_ATTR_STRING,
+                                         .s = "Linear"};
+    oattrs[na++] = (struct rb_oiio_attr){.name = "chromaticities", .type = RB_OIIO_ATTR_FLOATS,
+                                         .fv = rec709_chromaticities, .fv_count = 8};
+    oattrs[na++] = (struct rb_oiio_attr){.name = "software", .type = RB_OIIO_ATTR_STRING,
+                                         .s = "raybundle " RB_VERSION};
+    /* OIIO stamps the current time as EXR "capDate" unless the spec has a DateTime. An int
+     * DateTime counts as present, yet OIIO's EXR writer drops it (capDate must be a string),
+     * so the header gets no date at all. test_io checks the header for capDate. */
+    oattrs[na++] = (struct rb_oiio_attr){.name = "DateTime", .type = RB_OIIO_ATTR_INT, .i = 0};
+    for (size_t i = 0; i < attr_count; i++) {
+        const struct rb_io_attr *a = &attrs[i];
+        if (!a->name || !*a->name) {
+            st = rb_errf(err, RB_E_INVALID, "exr '%s': attribute %zu has no name", path, i);
+            goto out;
+        }
+        struct rb_oiio_attr *o = &oattrs[na++];
+        o->name = a->name;
+        switch (a->type) {
+        case RB_IO_ATTR_STRING:
+            if (!a->s) {
+                st = rb_errf(err, RB_E_INVALID, "exr '%s': attribute '%s' has no string", path,
+                             a->name);
+                goto out;
+            }
+            o->type = RB_OIIO_ATTR_STRING;
+            o->s = a->s;
+            break;
+        case RB_IO_ATTR_INT:
+            o->type = RB_OIIO_ATTR_INT;
+            o->i = a->i;
+            break;
+        case RB_IO_ATTR_FLOAT:
+            o->type = RB_OIIO_ATTR_FLOAT;
+            o->f = a->f;
+            break;
+        case RB_IO_ATTR_M44:
+            o->type = RB_OIIO_ATTR_M44;
+            o->fv = a->m;
+            o->fv_count = 16;
+            break;
+        default:
+            st = rb_errf(err, RB_E_INVALID, "exr '%s': attribute '%s' has unknown type %d",
+                         path, a->name, (int)a->type);
+            goto out;
+        }
+    }
+
+    struct rb_oiio_write_desc desc = {
+        .format_name = "openexr",
+        .width_px = width_px,
+        .height_px = height_px,
+        .channel_count = total,
+        .channel_names = (const char *const *)names,
+        .channel_is_half = is_half,
+        .pixels = pixels,
+        .attrs = oattrs,
+        .attr_count = na,
+    };
+    st = write_image_atomic(path, ".exr", &desc, err);
+out:
+    for (uint32_t i = 0; names && i < total; i++)
+        free(names[i]);
+    free(names);
+    free(is_half);
+    free(pixels);
+    free(order);
+    free(oattrs);
+    return st;
+}
+
+/* ---- reading ---------------------------------------------------------------------------- */
+
+enum rb_status rb_io_image_read(const char *path, struct rb_io_image *out, struct rb_err *err)
+{
+    enum rb_status st = RB_OK;
+    struct rb_oiio_input *in = NULL;
+    struct rb_oiio_info info = {0};
+    struct rb_io_image img = {0};
+    char msg[400];
+    struct stat sb;
+
+    if (!path || !*path || !out)
+        return rb_errf(err, RB_E_INVALID, "read image: no path");
+    if (stat(path, &sb) != 0)
+        return rb_errf(err, RB_E_IO, "cannot read '%s': %s", path, strerror(errno));
+    if (rb_oiio_input_open(path, &in, &info, msg, sizeof(msg)) != RB_OIIO_OK)
+        return rb_errf(err, RB_E_EXTERNAL, "cannot read '%s': %s", path, msg);
+
+    size_t bytes = mul3((size_t)info.width_px * info.height_px, info.channel_count,
+                        sizeof(float));
+    if (!bytes) {
+        st = rb_errf(err, RB_E_INVALID, "cannot read '%s': image too large", path);
+        goto out;
+    }
+    img.width_px = info.width_px;
+    img.height_px = info.height_px;
+    img.channel_count = info.channel_count;
+    img.pixels = malloc(bytes);
+    img.channel_names = calloc(info.channel_count, sizeof(*img.channel_names));
+    if (!img.pixels || !img.channel_names) {
+        st = rb_errf(err, RB_E_NOMEM, "cannot read '%s': out of memory", path);
+        goto out;
+    }
+    for (uint32_t c = 0; c < info.channel_count; c++) {
+        img.channel_names[c] = rb_strdup(rb_oiio_input_channel_name(in, c));
+        if (!img.channel_names[c]) {
+            st = rb_errf(err, RB_E_NOMEM, "cannot read '%s': out of memory", path);
+            goto out;
+        }
+    }
+    if (rb_oiio_input_read(in, img.pixels, msg, sizeof(msg)) != RB_OIIO_OK) {
+        st = rb_errf(err, RB_E_EXTERNAL, "cannot read '%s': %s", path, msg);
+        goto out;
+    }
+    *out = img;
+    img = (struct rb_io_image){0};
+out:
+    rb_io_image_release(&img);
+    rb_oiio_input_close(in);
+    return st;
+}
+
+void rb_io_image_release(struct rb_io_image *img)
+{
+    if (!img)
+        return;
+    for (uint32_t c = 0; img->channel_names && c < img->channel_count; c++)
+        free(img->channel_names[c]);
+    free(img->channel_names);
+    free(img->pixels);
+    *img = (struct rb_io_image){0};
+}
+
+int rb_io_image_channel(const struct rb_io_image *img, const char *name)
+{
+    if (!img || !name)
+        return -1;
+    for (uint32_t c = 0; c < img->channel_count; c++)
+        if (img->channel_names[c] && !strcmp(img->channel_names[c], name))
+            return (int)c;
+    return -1;
+}
+
+bool rb_io_image_attr(const char *path, const char *name, char *out, size_t size)
+{
+    struct rb_oiio_input *in = NULL;
+    struct rb_oiio_info info;
+    char msg[400];
+    if (!path || !name)
+        return false;
+    if (rb_oiio_input_open(path, &in, &info, msg, sizeof(msg)) != RB_OIIO_OK)
+        return false;
+    bool found = rb_oiio_input_attr(in, name, out, size);
+    rb_oiio_input_close(in);
+    return found;
+}
+
+bool rb_io_image_is_complete(const char *path)
+{
+    struct rb_io_image img = {0};
+    struct stat sb;
+    if (!path || stat(path, &sb) != 0 || !S_ISREG(sb.st_mode))
+        return false;
+    bool ok = rb_io_image_read(path, &img, NULL) == RB_OK;
+    rb_io_image_release(&img);
+    return ok;
+}
+
+/* ---- color ------------------------------------------------------------------------------ */
+
+static bool file_exists(const char *path)
+{
+    struct stat sb;
+    return stat(path, &sb) == 0 && S_ISREG(sb.st_mode);
+}
+
+const char *rb_io_default_ocio_config(void)
+{
+    /* Not thread-safe: one static buffer, rebuilt on each call. */
+    static char found[PATH_MAX + 64];
+    const char *datadir = getenv("RB_DATADIR");
+    if (datadir && *datadir) {
+        snprintf(found, sizeof(found), "%s/ocio/config.ocio", datadir);
+        if (file_exists(found))
+            return found;
+    }
+
+    char exe[PATH_MAX];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+    if (n > 0) {
+        exe[n] = '\0';
+        char *slash = strrchr(exe, '/');
+        if (slash) {
+            *slash = '\0';
+            /* Installed: <prefix>/bin/raybundle. Source tree: <repo>/build/raybundle. */
+            static const char *const rel[] = {"../share/raybundle/ocio/config.ocio",
+                                              "../share/ocio/config.ocio"};
+            for (size_t i = 0; i < sizeof(rel) / sizeof(rel[0]); i++) {
+                snprintf(found, sizeof(found), "%s/%s", exe, rel[i]);
+                if (file_exists(found))
+                    return found;
+            }
+        }
+    }
+    snprintf(found, sizeof(found), "%s/ocio/config.ocio", RB_DATADIR);
+    return found;
+}
+
+static uint8_t quantize(float v)
+{
+    if (!(v > 0.0f)) /* also NaN */
+        return 0;
+    if (v >= 1.0f)
+        return 255;
+    return (uint8_t)(v * 255.0f + 0.5f);
+}
+
+enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t height_px,
+                                   const float *rgba, const struct rb_io_color_desc *desc,
+                                   struct rb_err *err)
+{
+    enum rb_status st = RB_OK;
+    float *work = NULL;
+    uint8_t *bytes = NULL;
+    char msg[480];
+
+    if (!path || !*path)
+        return rb_errf(err, RB_E_INVALID, "preview: empty path");
+    if (!width_px || !height_px || !rgba)
+        return rb_errf(err, RB_E_INVALID, "preview '%s': empty image", path);
+
+    const char *config = desc && desc->config && *desc->config ? desc->config : NULL;
+    if (!config) {
+        const char *env = getenv("OCIO");
+        config = env && *env ? env : rb_io_default_ocio_config();
+    }
+    struct stat sb;
+    if (stat(config, &sb) != 0)
+        return rb_errf(err, RB_E_IO, "ocio: cannot read config '%s': %s", config,
+                       strerror(errno));
+    if (!S_ISREG(sb.st_mode))
+        return rb_errf(err, RB_E_IO, "ocio: cannot read config '%s': not a regular file",
+                       config);
+
+    size_t count = (size_t)width_px * height_px;
+    size_t fbytes = mul3(count, 4, sizeof(float));
+    if (!fbytes)
+        return rb_errf(err, RB_E_INVALID, "preview '%s': image too large", path);
+    work = malloc(fbytes);
+    bytes = malloc(count * 4);
+    if (!work || !bytes) {
+        st = rb_errf(err, RB_E_NOMEM, "preview '%s': out of memory", path);
+        goto out;
+    }
+    /* The render is premultiplied; PNG stores unassociated alpha, and the view transform is
+     * meant for color, not color times coverage. */
+    memcpy(work, rgba, fbytes);
+    for (size_t p = 0; p < count; p++) {
+        float a = work[p * 4 + 3];
+        if (a > 0.0f && a < 1.0f)
+            for (int c = 0; c < 3; c++)
+                work[p * 4 + c] /= a;
+    }
+
+    int r = rb_ocio_display_view_apply(config, desc ? desc->display : NULL,
+                                       desc ? desc->view : NULL, work, width_px, height_px, NULL,
+                                       NULL, 0, msg, sizeof(msg));
+    if (r != RB_OCIO_OK) {
+        st = rb_errf(err, r == RB_OCIO_NO_NAME ? RB_E_INVALID : RB_E_EXTERNAL, "%s", msg);
+        goto out;
+    }
+    for (size_t i = 0; i < count * 4; i++)
+        bytes[i] = quantize(work[i]);
+
+    static const char *const names[4] = {"R", "G", "B", "A"};
+    /* The bytes are final: OIIO must not (de)associate alpha on the way out. */
+    const struct rb_oiio_attr attrs[] = {
+        {.name = "oiio:UnassociatedAlpha", .type = RB_OIIO_ATTR_INT, .i = 1},
+        {.name = "Software", .type = RB_OIIO_ATTR_STRING, .s = "raybundle " RB_VERSION},
+    };
+    struct rb_oiio_write_desc wd = {
+        .format_name = "png",
+        .width_px = width_px,
+        .height_px = height_px,
+        .channel_count = 4,
+        .channel_names = names,
+        .is_uint8 = true,
+        .pixels = bytes,
+        .attrs = attrs,
+        .attr_count = sizeof(attrs) / sizeof(attrs[0]),
+    };
+    st = write_image_atomic(path, ".png", &wd, err);
+out:
+    free(work);
+    free(bytes);
+    return st;
+}
+
+/* ---- timing sidecar ------------------------------------------------------------------- */
+
+/* A growing text buffer; a failed allocation sets is_oom and drops further text. */
+struct text {
+    char *s;
+    size_t len, cap;
+    bool is_oom;
+};
+
+static void text_add(struct text *t, const char *s, size_t n)
+{
+    if (t->is_oom)
+        return;
+    if (t->len + n + 1 > t->cap) {
+        size_t cap = t->cap ? t->cap : 1024;
+        while (cap < t->len + n + 1)
+            cap *= 2;
+        char *p = realloc(t->s, cap);
+        if (!p) {
+            t->is_oom = true;
+            return;
+        }
+        t->s = p;
+        t->cap = cap;
+    }
+    memcpy(t->s + t->len, s, n);
+    t->len += n;
+    t->s[t->len] = '\0';
+}
+
+static void text_puts(struct text *t, const char *s)
+{
+    text_add(t, s, strlen(s));
+}
+
+__attribute__((format(printf, 2, 3))) static void text_printf(struct text *t, const char *fmt,
+                                                              ...)
+{
+    char buf[128];
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(buf, sizeof(buf), fmt, ap);
+    va_end(ap);
+    if (n < 0 || (size_t)n >= sizeof(buf)) {
+        t->is_oom = true; /* not reached: only numbers go through here */
+        return;
+    }
+    text_add(t, buf, (size_t)n);
+}
+
+/* A JSON number: the shortest of %.15g / %.17g that reads back exactly; null for NaN and
+ * infinities, which JSON cannot spell. */
+static void json_number(struct text *t, double v)
+{
+    if (!isfinite(v)) {
+        text_puts(t, "null");
+        return;
+    }
+    char buf[64];
+    snprintf(buf, sizeof(buf), "%.15g", v);
+    if (strtod(buf, NULL) != v)
+        snprintf(buf, sizeof(buf), "%.17g", v);
+    text_puts(t, buf);
+}
+
+static void json_string(struct text *t, const char *s)
+{
+    if (!s) {
+        text_puts(t, "null");
+        return;
+    }
+    text_puts(t, "\"");
+    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+        switch (*p) {
+        case '"': text_puts(t, "\\\""); break;
+        case '\\': text_puts(t, "\\\\"); break;
+        case '\b': text_puts(t, "\\b"); break;
+        case '\f': text_puts(t, "\\f"); break;
+        case '\n': text_puts(t, "\\n"); break;
+        case '\r': text_puts(t, "\\r"); break;
+        case '\t': text_puts(t, "\\t"); break;
+        default:
+            if (*p < 0x20)
+                text_printf(t, "\\u%04x", *p);
+            else
+                text_add(t, (const char *)p, 1);
+        }
+    }
+    text_puts(t, "\"");
+}
+
+enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *tm,
+                                  struct rb_err *err)
+{
+    if (!path || !*path || !tm)
+        return rb_errf(err, RB_E_INVALID, "timing: no path or no timing");
+    if (tm->pass_count && !tm->passes)
+        return rb_errf(err, RB_E_INVALID, "timing '%s': %zu passes but no pass array", path,
+                       tm->pass_count);
+
+    struct text t = {0};
+    double gpu_total_ms = 0.0;
+    text_printf(&t, "{\n  \"frame\": %d,\n  \"time_s\": ", tm->frame);
+    json_number(&t, tm->time_s);
+    text_puts(&t, ",\n  \"passes\": [");
+    for (size_t i = 0; i < tm->pass_count; i++) {
+        text_puts(&t, i ? ",\n    {\"name\": " : "\n    {\"name\": ");
+        json_string(&t, tm->passes[i].name);
+        text_puts(&t, ", \"gpu_ms\": ");
+        json_number(&t, tm->passes[i].gpu_ms);
+        text_puts(&t, "}");
+        gpu_total_ms += tm->passes[i].gpu_ms;
+    }
+    text_puts(&t, tm->pass_count ? "\n  ],\n  \"wall_ms\": " : "],\n  \"wall_ms\": ");
+    json_number(&t, tm->wall_ms);
+    text_puts(&t, ",\n  \"gpu_total_ms\": ");
+    json_number(&t, gpu_total_ms);
+    text_puts(&t, ",\n  \"device\": ");
+    json_string(&t, tm->device);
+    text_puts(&t, ",\n  \"driver\": ");
+    json_string(&t, tm->driver);
+    text_puts(&t, ",\n  \"integrator\": ");
+    json_string(&t, tm->integrator);
+    text_printf(&t, ",\n  \"width\": %u,\n  \"height\": %u\n}\n", tm->width_px, tm->height_px);
+
+    enum rb_status st;
+    if (t.is_oom)
+        st = rb_errf(err, RB_E_NOMEM, "timing '%s': out of memory", path);
+    else
+        st = rb_io_write_atomic(path, t.s, t.len, err);
+    free(t.s);
+    return st;
+}

@@ -1,0 +1,119 @@
+/* Files in and out: multi-layer OpenEXR frames with metadata (OpenImageIO), images read as
+ * float RGBA (environment maps, tests, compare), display previews (OpenColorIO), the timing
+ * sidecar, frame-path patterns, and atomic writes (temporary name, then rename). */
+#ifndef RB_IO_IO_H
+#define RB_IO_IO_H
+
+#include "core/core.h"
+
+/* ---- paths ------------------------------------------------------------------------------ */
+
+/* Replaces the last run of '#' in pattern with frame, zero-padded to the run's length (more
+ * digits when needed). A pattern with no '#' gets ".####" inserted before its extension. */
+enum rb_status rb_io_frame_path(const char *pattern, int frame, char *out, size_t size,
+                                struct rb_err *err);
+
+/* The sidecar beside an EXR: "a/shot.0012.exr" + ".timing.json" -> "a/shot.0012.timing.json". */
+enum rb_status rb_io_sidecar_path(const char *exr_path, const char *suffix, char *out,
+                                  size_t size, struct rb_err *err);
+
+/* Creates every missing directory leading to path's file (like mkdir -p of its dirname). */
+enum rb_status rb_io_make_parent_dirs(const char *path, struct rb_err *err);
+
+/* Writes data to path + ".tmp.<pid>", fsyncs, and renames it over path. */
+enum rb_status rb_io_write_atomic(const char *path, const void *data, size_t size,
+                                  struct rb_err *err);
+
+/* ---- EXR -------------------------------------------------------------------------------- */
+
+/* A group of channels. name NULL or "" is the beauty (channels R,G,B,A); otherwise channels are
+ * written as "<name>.<channel>". pixels are interleaved, width*height*channel_count floats,
+ * rows top to bottom. */
+struct rb_io_layer {
+    const char *name;
+    uint32_t channel_count;           /* 1..4 */
+    const char *const *channel_names; /* e.g. {"X","Y","Z"} */
+    const float *pixels;
+    bool is_half;                     /* store as half instead of float */
+};
+
+/* One string, int, float or matrix attribute of the EXR header. */
+enum rb_io_attr_type { RB_IO_ATTR_STRING = 1, RB_IO_ATTR_INT, RB_IO_ATTR_FLOAT, RB_IO_ATTR_M44 };
+struct rb_io_attr {
+    const char *name; /* e.g. "raybundle/integrator", "worldToCamera" */
+    enum rb_io_attr_type type;
+    const char *s;
+    int i;
+    float f;
+    float m[16]; /* row-major, as OpenEXR's M44f */
+};
+
+/* Writes a multi-layer EXR (ZIP, lossless) atomically, with the given attributes plus the
+ * Rec.709 chromaticities; nothing time-dependent goes in, so equal pixels give equal bytes. */
+enum rb_status rb_io_exr_write(const char *path, uint32_t width_px, uint32_t height_px,
+                               const struct rb_io_layer *layers, size_t layer_count,
+                               const struct rb_io_attr *attrs, size_t attr_count,
+                               struct rb_err *err);
+
+/* True when path exists and reads back completely as an image (used by --resume). */
+bool rb_io_image_is_complete(const char *path);
+
+/* An image in memory: float channels, interleaved. */
+struct rb_io_image {
+    uint32_t width_px, height_px, channel_count;
+    char **channel_names; /* channel_count names as stored in the file */
+    float *pixels;
+};
+
+/* Reads every channel of an image file (EXR, HDR, PNG, ...) as float. Free with
+ * rb_io_image_release. */
+enum rb_status rb_io_image_read(const char *path, struct rb_io_image *out, struct rb_err *err);
+void rb_io_image_release(struct rb_io_image *img);
+/* Index of the named channel ("R", "direct.R"), or -1. */
+int rb_io_image_channel(const struct rb_io_image *img, const char *name);
+/* Reads a string attribute of the file's header into out; false when absent. */
+bool rb_io_image_attr(const char *path, const char *name, char *out, size_t size);
+
+/* ---- color ------------------------------------------------------------------------------ */
+
+struct rb_io_color_desc {
+    const char *config;  /* path; NULL: $OCIO, then RB_DATADIR/ocio/config.ocio */
+    const char *display; /* NULL: the config's default display */
+    const char *view;    /* NULL: the display's default view */
+};
+
+/* Converts scene-linear Rec.709 RGBA (width*height*4 floats) through the config's view
+ * transform and writes an 8-bit sRGB PNG atomically. */
+enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t height_px,
+                                   const float *rgba, const struct rb_io_color_desc *desc,
+                                   struct rb_err *err);
+
+/* The bundled OCIO config (installed with the binary; the source tree's when run from it). */
+const char *rb_io_default_ocio_config(void);
+
+/* ---- timing sidecar ------------------------------------------------------------------- */
+
+struct rb_io_pass_time {
+    const char *name;
+    double gpu_ms;
+};
+
+struct rb_io_timing {
+    int frame;
+    double time_s;
+    const struct rb_io_pass_time *passes;
+    size_t pass_count;
+    double wall_ms;
+    const char *device;
+    const char *driver;
+    const char *integrator;
+    uint32_t width_px, height_px;
+};
+
+/* Writes NAME.####.timing.json atomically:
+ * {"frame": 12, "time_s": 0.5, "passes": [{"name": "gbuffer", "gpu_ms": 1.25}, ...],
+ *  "wall_ms": 40.1, "device": "...", "driver": "...", ...}. */
+enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t,
+                                  struct rb_err *err);
+
+#endif

@@ -1,0 +1,137 @@
+/* The job: a YAML job file (or a glTF for a quick look) turned into a validated struct.
+ * Only lib/job knows YAML; everything else sees struct rb_job. Keys, types, ranges and defaults
+ * live in one table (job.c), which also feeds `raybundle help job` and the man-page test. */
+#ifndef RB_JOB_JOB_H
+#define RB_JOB_JOB_H
+
+#include "core/core.h"
+
+#include <stdio.h>
+
+enum rb_integrator_kind {
+    RB_INTEGRATOR_DEFAULT = 0, /* resolves to DIRECT */
+    RB_INTEGRATOR_DIRECT,
+    RB_INTEGRATOR_BDPT,
+    RB_INTEGRATOR_HYBRID,
+    RB_INTEGRATOR_REFERENCE,
+};
+
+enum rb_interp {
+    RB_INTERP_DEFAULT = 0, /* resolves to CATMULL_ROM */
+    RB_INTERP_LINEAR,
+    RB_INTERP_CATMULL_ROM,
+};
+
+enum rb_light_type {
+    RB_LIGHT_INVALID = 0,
+    RB_LIGHT_POINT,
+    RB_LIGHT_SPOT,
+    RB_LIGHT_DIRECTIONAL,
+};
+
+struct rb_job_camera_key {
+    double t_s;
+    float position[3];
+    float look_at[3];
+    float fov_y_deg; /* 0 == the track's fov_y_deg */
+};
+
+struct rb_job_light {
+    enum rb_light_type type;
+    float position[3];  /* point, spot */
+    float direction[3]; /* spot, directional: the direction the light travels */
+    float color[3];     /* linear Rec.709, default 1,1,1 */
+    float intensity;    /* candela (point, spot) or lux (directional), as KHR_lights_punctual */
+    float range;        /* 0 == infinite */
+    float inner_cone_deg, outer_cone_deg; /* spot; defaults 0 and 45 */
+};
+
+struct rb_job {
+    char *path;       /* the job file as given */
+    char *scene_path; /* resolved relative to the job file's directory */
+    char *output;     /* output pattern, resolved relative to the job file; '#' run = frame */
+    uint32_t width_px, height_px;
+    int frame_start, frame_end; /* inclusive; frame_end == -1: to the end of the animation */
+    double rate_fps;
+
+    struct {
+        char *node; /* a glTF camera node by name; NULL: use keys, or fit to the scene */
+        float fov_y_deg;
+        enum rb_interp interpolation;
+        struct rb_job_camera_key *keys;
+        size_t key_count;
+        float near_m, far_m; /* clip planes; 0 == derived from the scene bounds */
+    } camera;
+
+    struct {
+        char **clips; /* names; none: the scene's first animation, if any */
+        size_t clip_count;
+        double offset_s, speed;
+        bool loop;
+    } animation;
+
+    struct rb_job_light *lights; /* added to the scene's own lights */
+    size_t light_count;
+    bool use_scene_lights; /* default true */
+
+    struct {
+        char *map;          /* equirectangular EXR/HDR, resolved; NULL: uniform color */
+        float color[3];     /* radiance where there is no map, default 0 */
+        float intensity;    /* default 1 */
+        float rotation_deg; /* about +Y */
+    } environment;
+
+    struct {
+        enum rb_integrator_kind name;
+        struct {
+            uint32_t shadow_size_px; /* per cube face / shadow map, default 1024 */
+            float shadow_bias;       /* in world units, scaled by the slope; default 0.002 */
+            float pcf_radius_px;     /* radius of the 16-tap PCF kernel, default 1.5 */
+        } direct;
+    } integrator;
+
+    struct {
+        char *config;  /* OCIO config, resolved; NULL: $OCIO, then the bundled config */
+        char *display; /* NULL: the config's default */
+        char *view;    /* NULL: the config's default */
+        bool preview;  /* write NAME.####.png beside each EXR */
+    } color;
+
+    uint64_t hash; /* of every setting that changes pixels (not the frame range or output) */
+};
+
+/* One `--set key.path=value` override, applied after the file is parsed. */
+struct rb_job_override {
+    const char *key;   /* dotted path, e.g. "integrator.direct.shadow_size" */
+    const char *value; /* YAML flow text, e.g. "512" or "[640, 360]" */
+};
+
+/* Parses a job file, applies overrides in order, validates, resolves defaults and relative paths
+ * and computes the hash. A path ending in .gltf or .glb builds the default job for that scene.
+ * Errors name file:line:column ("--set:N:col" for overrides) and return RB_E_PARSE or
+ * RB_E_INVALID; a missing file returns RB_E_IO. *out is written only on success and is freed
+ * with rb_job_destroy. */
+enum rb_status rb_job_load(const char *path, const struct rb_job_override *overrides,
+                           size_t override_count, struct rb_job **out, struct rb_err *err);
+
+/* Parses job text held in memory; name is used in messages and base_dir resolves paths. */
+enum rb_status rb_job_parse(const char *name, const char *text, size_t size, const char *base_dir,
+                            const struct rb_job_override *overrides, size_t override_count,
+                            struct rb_job **out, struct rb_err *err);
+
+/* Recomputes job->hash after a caller changed fields (the CLI's --size and such). */
+void rb_job_rehash(struct rb_job *job);
+
+void rb_job_destroy(struct rb_job *job);
+
+const char *rb_integrator_name(enum rb_integrator_kind kind);
+/* Returns RB_INTEGRATOR_DEFAULT when name is unknown. */
+enum rb_integrator_kind rb_integrator_from_name(const char *name);
+
+/* Writes every key with its type, default and help to f (for `raybundle help job`). */
+void rb_job_print_keys(FILE *f);
+/* The number of keys in the table and the dotted path of key i (for the man-page test). */
+size_t rb_job_key_count(void);
+const char *rb_job_key_path(size_t i);
+
+#endif

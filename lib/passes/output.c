@@ -1,0 +1,84 @@
+/* output: packs beauty and the named layers into one host-visible buffer, so a frame is read
+ * back with a single copy (the order is RB_OUT_* in shaders/common/shared.h). */
+#include "passes/passes.h"
+
+#include <stdlib.h>
+
+#include "output.comp.h"
+
+struct rb_pass_output {
+    struct rb_gpu *gpu;
+    struct rb_gpu_layout layout;
+    VkPipeline pipeline;
+};
+
+static const VkDescriptorType bindings[] = {
+    VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+    VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,  VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+    VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,  VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+    VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,  VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+};
+
+enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output **out,
+                                     struct rb_err *err)
+{
+    struct rb_pass_output *p = calloc(1, sizeof(*p));
+    if (!p)
+        return rb_errf(err, RB_E_NOMEM, "out of memory");
+    p->gpu = gpu;
+    enum rb_status st = rb_gpu_layout_init(gpu, bindings, 8, 0, &p->layout, err);
+    if (st == RB_OK)
+        st = rb_gpu_compute_pipeline(gpu, rb_spv_output_comp, sizeof(rb_spv_output_comp),
+                                     p->layout.pipeline_layout, "output", &p->pipeline, err);
+    if (st) {
+        rb_pass_output_destroy(p);
+        return st;
+    }
+    *out = p;
+    return RB_OK;
+}
+
+void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
+                           const struct rb_frame *frame)
+{
+    const struct rb_gpu_image *images[] = {
+        frame->beauty,
+        &frame->direct,
+        &frame->gbuffer[RB_GB_ALBEDO],
+        &frame->gbuffer[RB_GB_NORMAL],
+        &frame->gbuffer[RB_GB_POSITION],
+        &frame->gbuffer[RB_GB_MOTION],
+    };
+    struct rb_gpu_bindings b = {0};
+    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, &frame->globals);
+    for (size_t i = 0; i < sizeof(images) / sizeof(images[0]); i++)
+        rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, images[i]->view, VK_NULL_HANDLE,
+                          VK_IMAGE_LAYOUT_GENERAL);
+    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &frame->readback);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
+    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_COMPUTE,
+                         p->layout.pipeline_layout, &b);
+    vkCmdDispatch(cmd, (frame->width_px + 7) / 8, (frame->height_px + 7) / 8, 1);
+    /* Make the shader writes visible to the host's read after the fence. */
+    VkMemoryBarrier2 mb = {
+        .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
+        .srcStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+        .srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+        .dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT,
+        .dstAccessMask = VK_ACCESS_2_HOST_READ_BIT,
+    };
+    VkDependencyInfo dep = {.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
+                            .memoryBarrierCount = 1,
+                            .pMemoryBarriers = &mb};
+    vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+void rb_pass_output_destroy(struct rb_pass_output *p)
+{
+    if (!p)
+        return;
+    if (p->pipeline)
+        vkDestroyPipeline(p->gpu->device, p->pipeline, NULL);
+    rb_gpu_layout_release(p->gpu, &p->layout);
+    free(p);
+}

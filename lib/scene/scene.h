@@ -1,0 +1,261 @@
+/* The scene: a glTF 2.0 file (.gltf or .glb, through tinygltf) as flat C arrays, and its
+ * evaluation at a time: animated node transforms, skin joint matrices, morph weights, the camera
+ * track and the lights in world space. Geometry is kept in the file's local spaces; the GPU
+ * `animate` pass applies skins, morphs and node transforms. Objects refer to each other by index. */
+#ifndef RB_SCENE_SCENE_H
+#define RB_SCENE_SCENE_H
+
+#include "core/core.h"
+#include "job/job.h"
+
+#define RB_SCENE_NONE UINT32_MAX /* "no such object" in an index field */
+
+/* One vertex as the loader stores it and the animate pass reads it (std430-compatible). */
+struct rb_scene_vertex {
+    float position[3];
+    float normal[3];  /* generated (flat, per face) when the file has none */
+    float tangent[4]; /* xyz, w = handedness; generated when there is a normal map and none */
+    float uv[2];      /* TEXCOORD_0, or 0 */
+    uint32_t joints[4];
+    float weights[4]; /* all 0 for an unskinned vertex */
+};
+
+/* Per morph target and vertex: deltas added with the target's weight. */
+struct rb_scene_morph_delta {
+    float position[3];
+    float normal[3];
+};
+
+struct rb_scene_texture {
+    char *name;       /* for messages: the image's name or uri */
+    uint32_t width_px, height_px;
+    uint8_t *rgba8;   /* width*height*4 bytes, rows top to bottom, as stored (sRGB or linear) */
+};
+
+enum rb_alpha_mode { RB_ALPHA_OPAQUE = 0, RB_ALPHA_MASK, RB_ALPHA_BLEND };
+
+struct rb_scene_material {
+    char *name;
+    float base_color[4];          /* factor, linear */
+    uint32_t base_color_tex;      /* texture index or RB_SCENE_NONE; sRGB-encoded */
+    float metallic, roughness;    /* factors */
+    uint32_t metallic_roughness_tex; /* G = roughness, B = metallic; linear */
+    uint32_t normal_tex;
+    float normal_scale;
+    float emissive[3];            /* factor times KHR_materials_emissive_strength */
+    uint32_t emissive_tex;        /* sRGB-encoded */
+    enum rb_alpha_mode alpha_mode;
+    float alpha_cutoff;
+    bool double_sided;
+    float specular_factor;   /* KHR_materials_specular; 1 without the extension */
+    float specular_color[3]; /* KHR_materials_specular; 1,1,1 without the extension */
+};
+
+struct rb_scene_primitive {
+    uint32_t material;      /* index; the scene always has a default material at the end */
+    uint32_t first_vertex;  /* into scene->vertices */
+    uint32_t vertex_count;
+    uint32_t first_index;   /* into scene->indices; values are relative to first_vertex */
+    uint32_t index_count;   /* triangles only; non-indexed primitives get 0..n-1 */
+    uint32_t first_morph;   /* into scene->morph_deltas: target t, vertex v at
+                             * first_morph + t * vertex_count + v */
+    uint32_t morph_target_count;
+};
+
+struct rb_scene_mesh {
+    char *name;
+    uint32_t first_primitive, primitive_count;
+    float *default_weights; /* morph_target_count of them (mesh.weights or 0) */
+    uint32_t weight_count;
+};
+
+struct rb_scene_node {
+    char *name;
+    uint32_t parent; /* RB_SCENE_NONE for a root */
+    struct rb_vec3 translation;
+    struct rb_quat rotation;
+    struct rb_vec3 scale;
+    uint32_t mesh, skin, camera, light; /* RB_SCENE_NONE when absent */
+    float *weights;   /* node.weights override, or NULL */
+    bool in_scene;    /* reachable from the default scene's roots */
+};
+
+struct rb_scene_skin {
+    char *name;
+    uint32_t *joints; /* node indices */
+    struct rb_mat4 *inverse_bind;
+    uint32_t joint_count;
+};
+
+struct rb_scene_camera {
+    char *name;
+    bool is_perspective;
+    float yfov_rad, aspect; /* aspect 0: from the image */
+    float znear, zfar;      /* zfar 0: infinite */
+    float xmag, ymag;       /* orthographic */
+};
+
+struct rb_scene_light {
+    char *name;
+    enum rb_light_type type;
+    float color[3];
+    float intensity;
+    float range; /* 0: infinite */
+    float inner_cone_rad, outer_cone_rad;
+};
+
+enum rb_anim_path { RB_ANIM_TRANSLATION = 1, RB_ANIM_ROTATION, RB_ANIM_SCALE, RB_ANIM_WEIGHTS };
+enum rb_anim_interp { RB_ANIM_LINEAR = 0, RB_ANIM_STEP, RB_ANIM_CUBICSPLINE };
+
+struct rb_scene_anim_sampler {
+    enum rb_anim_interp interpolation;
+    float *times;       /* key_count, increasing */
+    float *values;      /* key_count * components (x3 for CUBICSPLINE: in-tangent, value,
+                         * out-tangent per key, as glTF stores them) */
+    uint32_t key_count;
+    uint32_t components; /* 3, 4, or the morph target count */
+};
+
+struct rb_scene_anim_channel {
+    uint32_t sampler; /* within the animation */
+    uint32_t node;
+    enum rb_anim_path path;
+};
+
+struct rb_scene_animation {
+    char *name;
+    struct rb_scene_anim_sampler *samplers;
+    uint32_t sampler_count;
+    struct rb_scene_anim_channel *channels;
+    uint32_t channel_count;
+    float duration_s; /* the largest key time */
+};
+
+struct rb_scene {
+    char *path;
+    struct rb_scene_vertex *vertices;
+    uint32_t vertex_count;
+    uint32_t *indices;
+    uint32_t index_count;
+    struct rb_scene_morph_delta *morph_deltas;
+    uint32_t morph_delta_count;
+    struct rb_scene_primitive *primitives;
+    uint32_t primitive_count;
+    struct rb_scene_mesh *meshes;
+    uint32_t mesh_count;
+    struct rb_scene_material *materials; /* the last one is the default material */
+    uint32_t material_count;
+    struct rb_scene_texture *textures;
+    uint32_t texture_count;
+    struct rb_scene_node *nodes;
+    uint32_t node_count;
+    struct rb_scene_skin *skins;
+    uint32_t skin_count;
+    struct rb_scene_camera *cameras;
+    uint32_t camera_count;
+    struct rb_scene_light *lights;
+    uint32_t light_count;
+    struct rb_scene_animation *animations;
+    uint32_t animation_count;
+};
+
+/* Loads a .gltf or .glb. Unsupported features that change the picture (a non-triangle primitive,
+ * a required extension we lack) are errors naming the element ("mesh 'Body' primitive 2: ...");
+ * ones that do not are warnings through rb_log. Missing or corrupt files and images are errors.
+ * Returns RB_E_IO, RB_E_PARSE or RB_E_UNSUPPORTED on failure; *out only on success. */
+enum rb_status rb_scene_load(const char *path, struct rb_scene **out, struct rb_err *err);
+void rb_scene_destroy(struct rb_scene *scene);
+
+/* Index of the node, camera node, or animation with that name, or RB_SCENE_NONE. */
+uint32_t rb_scene_find_node(const struct rb_scene *scene, const char *name);
+uint32_t rb_scene_find_animation(const struct rb_scene *scene, const char *name);
+
+/* ---- evaluation ----------------------------------------------------------------------------- */
+
+/* One drawable: a primitive of a mesh instanced by a node of the default scene. */
+struct rb_scene_instance {
+    uint32_t node, primitive;
+    uint32_t first_joint;  /* into pose->joint_matrices, or RB_SCENE_NONE when not skinned */
+    uint32_t first_weight; /* into pose->morph_weights, or RB_SCENE_NONE without morphs */
+};
+
+/* The scene at one time. Sized once per scene (rb_scene_pose_create) and refilled per frame. */
+struct rb_scene_pose {
+    struct rb_mat4 *node_world; /* node_count */
+    struct rb_scene_instance *instances;
+    uint32_t instance_count;
+    struct rb_mat4 *joint_matrices; /* joint world * inverse bind, per skinned instance */
+    uint32_t joint_matrix_count;
+    float *morph_weights; /* per morphed instance, its primitive's target count */
+    uint32_t morph_weight_count;
+    struct rb_vec3 bounds_min, bounds_max; /* world bounds of the posed geometry (approximate
+                                            * for skinned meshes: joint-transformed boxes) */
+};
+
+/* Which clips play and how their time maps from the frame time. */
+struct rb_anim_selection {
+    const uint32_t *clips; /* animation indices; all play at once */
+    uint32_t clip_count;
+    double offset_s, speed;
+    bool loop;
+};
+
+enum rb_status rb_scene_pose_create(const struct rb_scene *scene, struct rb_scene_pose **out,
+                                    struct rb_err *err);
+void rb_scene_pose_destroy(struct rb_scene_pose *pose);
+
+/* Evaluates the selected clips at time_s (seconds of the sequence; the selection maps it to clip
+ * time) into pose. Deterministic and allocation-free. */
+void rb_scene_evaluate(const struct rb_scene *scene, const struct rb_anim_selection *sel,
+                       double time_s, struct rb_scene_pose *pose);
+
+/* Samples one sampler at clip time t into out (components floats), for tests. */
+void rb_scene_sample(const struct rb_scene_anim_sampler *s, float t, float *out);
+
+/* rb_scene_sample clamps before the first and after the last key, interpolates LINEAR
+ * component-wise (no slerp) and CUBICSPLINE as glTF's Hermite spline with tangents scaled by
+ * the key interval. This variant is for a channel of the given path: a 4-component
+ * RB_ANIM_ROTATION sampler slerps (LINEAR) or is normalized after interpolation (STEP,
+ * CUBICSPLINE), as rb_scene_evaluate does. Other paths are plain rb_scene_sample. */
+void rb_scene_sample_path(const struct rb_scene_anim_sampler *s, enum rb_anim_path path,
+                          float t, float *out);
+
+/* The camera at a time, in world space. */
+struct rb_camera {
+    struct rb_mat4 world_to_camera;
+    struct rb_vec3 position;
+    float fov_y_rad;
+    float z_near, z_far;
+};
+
+/* Evaluates the job's camera: a glTF camera node (from pose), keyframes (linear or Catmull-Rom,
+ * clamped at the ends), or, with neither, a view fitted to the pose bounds. Fails only for a
+ * camera node name that does not exist or has no camera (RB_E_INVALID). */
+enum rb_status rb_camera_evaluate(const struct rb_job *job, const struct rb_scene *scene,
+                                  const struct rb_scene_pose *pose, double time_s,
+                                  struct rb_camera *out, struct rb_err *err);
+
+/* A light in world space, from the scene (with its node's transform) or from the job. */
+struct rb_world_light {
+    enum rb_light_type type;
+    struct rb_vec3 position;
+    struct rb_vec3 direction; /* unit, the direction light travels */
+    float color[3];           /* color * intensity */
+    float range;
+    float inner_cone_rad, outer_cone_rad;
+};
+
+/* Writes up to cap lights (scene lights when job->use_scene_lights, then job lights; when that
+ * gives none, one default point light above the scene bounds) and returns how many there are in
+ * all, so a caller can detect and report a list that did not fit. */
+uint32_t rb_scene_world_lights(const struct rb_job *job, const struct rb_scene *scene,
+                               const struct rb_scene_pose *pose, struct rb_world_light *out,
+                               uint32_t cap);
+
+/* Resolves the job's clip names to indices (all names must exist; none given: the first
+ * animation, if any). Writes at most cap indices. */
+enum rb_status rb_scene_select_clips(const struct rb_scene *scene, const struct rb_job *job,
+                                     uint32_t *out, uint32_t cap, uint32_t *count,
+                                     struct rb_err *err);
+
+#endif

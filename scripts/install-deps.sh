@@ -1,0 +1,36 @@
+#!/bin/sh
+# Installs the Debian 12 packages raybundle needs to build, render and test, and nothing from
+# anywhere else. Fast when everything is present; the one list of packages is here.
+set -eu
+
+PACKAGES="
+make gcc g++ pkg-config
+libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
+glslang-tools spirv-tools
+libopenimageio-dev openimageio-tools
+libopencolorio-dev opencolorio-tools
+libtinygltf-dev nlohmann-json3-dev
+libembree-dev
+libyaml-dev
+libcmocka-dev
+mandoc man-db time
+"
+
+missing=""
+for p in $PACKAGES; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+        missing="$missing $p"
+    fi
+done
+[ -z "$missing" ] && exit 0
+
+if [ "$(id -u)" != 0 ]; then
+    echo "install-deps: missing Debian packages:$missing" >&2
+    echo "install-deps: run this script as root (or: sudo apt-get install$missing)" >&2
+    exit 1
+fi
+echo "install-deps: installing$missing" >&2
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -q >&2
+# shellcheck disable=SC2086
+apt-get install -y -q --no-install-recommends $missing >&2

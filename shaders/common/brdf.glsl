@@ -1,0 +1,29 @@
+// The glTF metallic-roughness BRDF (glTF 2.0 spec, appendix B), with KHR_materials_specular's
+// weight: Lambert diffuse, GGX with Smith height-correlated visibility, Schlick Fresnel.
+// The CPU reference evaluates the same model; a test holds the two to each other.
+#ifndef RB_BRDF_GLSL
+#define RB_BRDF_GLSL
+
+const float RB_PI = 3.14159265358979323846;
+
+// c_diff: diffuse albedo; f0, f90: Fresnel at normal and grazing incidence; alpha = roughness^2.
+vec3 rb_brdf(vec3 n, vec3 v, vec3 l, vec3 c_diff, vec3 f0, float f90, float roughness)
+{
+    float ndl = max(dot(n, l), 0.0);
+    float ndv = max(dot(n, v), 1e-4);
+    if (ndl <= 0.0)
+        return vec3(0.0);
+    vec3 h = normalize(l + v);
+    float ndh = max(dot(n, h), 0.0);
+    float vdh = max(dot(v, h), 0.0);
+    float a = max(roughness * roughness, 1e-4);
+    float a2 = a * a;
+    vec3 F = f0 + (vec3(f90) - f0) * pow(1.0 - vdh, 5.0);
+    float d = ndh * ndh * (a2 - 1.0) + 1.0;
+    float D = a2 / (RB_PI * d * d);
+    float vis_den = ndl * sqrt(ndv * ndv * (1.0 - a2) + a2) + ndv * sqrt(ndl * ndl * (1.0 - a2) + a2);
+    float V = vis_den > 0.0 ? 0.5 / vis_den : 0.0;
+    return (vec3(1.0) - F) * c_diff / RB_PI + F * D * V;
+}
+
+#endif

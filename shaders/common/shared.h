@@ -1,0 +1,92 @@
+/* Buffer layouts shared by C and GLSL (std140 for the globals UBO, std430 for the rest).
+ * glslang defines VULKAN; C checks each size with _Static_assert in lib/passes/passes.h. */
+#ifndef RB_SHADERS_SHARED_H
+#define RB_SHADERS_SHARED_H
+
+#ifdef VULKAN
+#define RB_MAT4(n) mat4 n
+#define RB_VEC4(n) vec4 n
+#define RB_UVEC4(n) uvec4 n
+#define RB_IVEC4(n) ivec4 n
+#else
+#include <stdint.h>
+#define RB_MAT4(n) float n[16]
+#define RB_VEC4(n) float n[4]
+#define RB_UVEC4(n) uint32_t n[4]
+#define RB_IVEC4(n) int32_t n[4]
+#endif
+
+#define RB_NONE 0xffffffffu
+
+/* Floats per source vertex (struct rb_scene_vertex) and per morph delta. */
+#define RB_SRC_VERTEX_FLOATS 20
+#define RB_MORPH_DELTA_FLOATS 6
+
+/* Light kinds, as in enum rb_light_type. */
+#define RB_KIND_POINT 1
+#define RB_KIND_SPOT 2
+#define RB_KIND_DIRECTIONAL 3
+
+/* Per frame: camera, sizes, environment and shadow settings. */
+struct rb_gpu_globals {
+    RB_MAT4(view);
+    RB_MAT4(proj);
+    RB_MAT4(view_proj);
+    RB_MAT4(inv_view_proj);
+    RB_MAT4(prev_view_proj);
+    RB_VEC4(camera_pos);  /* xyz; w = vertical fov in radians */
+    RB_UVEC4(size);       /* width, height, light count, frame */
+    RB_VEC4(env);         /* intensity, rotation (rad), has map (0/1), unused */
+    RB_VEC4(env_color);   /* rgb radiance without a map */
+    RB_VEC4(shadow);      /* bias (fraction of distance), pcf radius (texels), map size, unused */
+};
+
+/* The animate pass's output and the raster passes' input: world space. */
+struct rb_gpu_vertex {
+    RB_VEC4(position); /* xyz; w unused */
+    RB_VEC4(normal);   /* xyz */
+    RB_VEC4(tangent);  /* xyz, w handedness */
+    RB_VEC4(uv);       /* xy; z = material index (as float bits) */
+};
+
+/* One drawable (node x primitive) per frame. */
+struct rb_gpu_instance {
+    RB_MAT4(world);
+    RB_MAT4(normal_matrix); /* inverse transpose of world */
+    RB_UVEC4(range);        /* src first vertex, vertex count, dst first vertex, material */
+    RB_UVEC4(deform);       /* first morph delta, morph target count, first weight, first joint */
+};
+
+struct rb_gpu_material {
+    RB_VEC4(base_color);
+    RB_VEC4(emissive);       /* rgb; w = normal scale */
+    RB_VEC4(params);         /* metallic, roughness, alpha cutoff (0: opaque), specular factor */
+    RB_VEC4(specular_color); /* rgb; w = double-sided (0/1) */
+    RB_IVEC4(textures);      /* base color, metallic-roughness, normal, emissive layer or -1 */
+};
+
+struct rb_gpu_light {
+    RB_VEC4(position);  /* xyz; w = kind */
+    RB_VEC4(direction); /* xyz, the direction light travels; w = range (0: infinite) */
+    RB_VEC4(color);     /* rgb = color * intensity; w = first shadow layer (-1: none) */
+    RB_VEC4(cone);      /* cos inner, cos outer, unused, unused */
+};
+
+/* One shadow-map layer: the light's view-projection for it. */
+struct rb_gpu_shadow_view {
+    RB_MAT4(view_proj);
+    RB_VEC4(light); /* xyz: position (point, spot) or the map's origin (directional); w = kind */
+    RB_VEC4(axis);  /* xyz: direction (directional); w: texel size, an angle (perspective, in
+                     * radians) or a length (directional, in world units) */
+};
+
+/* The output pass packs these floats per pixel, in this order, for one readback. */
+#define RB_OUT_BEAUTY 0 /* RGBA */
+#define RB_OUT_DIRECT 4 /* RGB */
+#define RB_OUT_ALBEDO 7 /* RGB */
+#define RB_OUT_NORMAL 10 /* XYZ */
+#define RB_OUT_DEPTH 13 /* Z */
+#define RB_OUT_MOTION 14 /* XY */
+#define RB_OUT_FLOATS 16
+
+#endif

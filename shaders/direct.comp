@@ -1,0 +1,117 @@
+// direct: light from punctual lights (shadow-mapped, 16-tap PCF) and emission at every G-buffer
+// pixel; the environment where no geometry is.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "shared.h"
+#include "brdf.glsl"
+#include "encode.glsl"
+#include "lights.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(std140, binding = 0) uniform Globals { rb_gpu_globals g; };
+layout(binding = 1, rgba32f) uniform readonly image2D gb_position;
+layout(binding = 2, rgba32f) uniform readonly image2D gb_normal;
+layout(binding = 3, rgba32f) uniform readonly image2D gb_albedo;
+layout(binding = 4, rgba32f) uniform readonly image2D gb_specular;
+layout(binding = 5, rgba32f) uniform readonly image2D gb_emission;
+layout(binding = 6, rgba32f) uniform readonly image2D gb_motion;
+layout(std430, binding = 7) readonly buffer Lights { rb_gpu_light lights[]; };
+layout(std430, binding = 8) readonly buffer Views { rb_gpu_shadow_view views[]; };
+layout(binding = 9) uniform sampler2DArray shadow_maps;
+layout(binding = 10) uniform sampler2D env_map;
+layout(binding = 11, rgba32f) uniform writeonly image2D o_direct;
+
+// Fraction of 16 taps (a 4x4 grid spanning the PCF radius) that see the light.
+float shadow_visibility(uint layer, vec3 p, float dist, float cos_theta)
+{
+    rb_gpu_shadow_view v = views[layer];
+    vec4 clip = v.view_proj * vec4(p, 1.0);
+    if (clip.w <= 0.0)
+        return 1.0;
+    vec2 ndc = clip.xy / clip.w;
+    float size = g.shadow.z;
+    vec2 texel = (ndc * 0.5 + 0.5) * size - 0.5;
+    bool persp = uint(v.light.w) != RB_KIND_DIRECTIONAL;
+    float tan_theta = min(sqrt(max(1.0 - cos_theta * cos_theta, 0.0)) / max(cos_theta, 1e-3), 10.0);
+    float radius = g.shadow.y;
+    float footprint = v.axis.w * (persp ? dist : 1.0);
+    float bias = g.shadow.x * max(dist, 1e-3) + footprint * (radius + 1.0) * tan_theta;
+    float step = radius / 1.5;
+    float lit = 0.0;
+    for (int y = 0; y < 4; y++)
+        for (int x = 0; x < 4; x++) {
+            vec2 o = (vec2(x, y) - 1.5) * step;
+            ivec2 t = clamp(ivec2(floor(texel + o + 0.5)), ivec2(0), ivec2(int(size) - 1));
+            float stored = texelFetch(shadow_maps, ivec3(t, int(layer)), 0).r;
+            lit += dist - bias <= stored ? 1.0 : 0.0;
+        }
+    return lit / 16.0;
+}
+
+void main()
+{
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(uvec2(px), g.size.xy)))
+        return;
+    vec4 pos = imageLoad(gb_position, px);
+    if (pos.w <= 0.0) {
+        // No geometry: the environment, seen through the pixel centre.
+        vec2 ndc = (vec2(px) + 0.5) / vec2(g.size.xy) * 2.0 - 1.0;
+        vec4 far = g.inv_view_proj * vec4(ndc, 1.0, 1.0);
+        vec3 dir = normalize(far.xyz / far.w - g.camera_pos.xyz);
+        vec3 env = g.env_color.rgb;
+        if (g.env.z > 0.5)
+            env = textureLod(env_map, rb_equirect_uv(dir, g.env.y), 0.0).rgb;
+        imageStore(o_direct, px, vec4(env * g.env.x, 0.0));
+        return;
+    }
+    vec3 p = pos.xyz;
+    vec3 n = imageLoad(gb_normal, px).xyz;
+    vec3 c_diff = imageLoad(gb_albedo, px).rgb;
+    vec4 spec = imageLoad(gb_specular, px);
+    vec4 emission = imageLoad(gb_emission, px);
+    vec3 ng = rb_oct_decode(imageLoad(gb_motion, px).zw);
+    vec3 v = normalize(g.camera_pos.xyz - p);
+
+    vec3 radiance = emission.rgb;
+    for (uint i = 0; i < g.size.z; i++) {
+        rb_gpu_light L = lights[i];
+        uint kind = uint(L.position.w);
+        vec3 l;
+        float dist, atten;
+        if (kind == RB_KIND_DIRECTIONAL) {
+            l = -L.direction.xyz;
+            dist = 0.0;
+            atten = 1.0;
+        } else {
+            vec3 d = L.position.xyz - p;
+            dist = length(d);
+            l = d / max(dist, 1e-8);
+            atten = rb_light_falloff(dist, L.direction.w);
+            if (kind == RB_KIND_SPOT)
+                atten *= rb_spot_factor(L.direction.xyz, -l, L.cone.xy);
+        }
+        float ndl = dot(n, l);
+        if (ndl <= 0.0 || atten <= 0.0 || dot(ng, l) <= 0.0)
+            continue;
+        float vis = 1.0;
+        int first = int(L.color.w);
+        if (first >= 0) {
+            float cos_g = max(dot(ng, l), 0.0);
+            if (kind == RB_KIND_POINT)
+                vis = shadow_visibility(uint(first) + rb_cube_face(-l), p, dist, cos_g);
+            else if (kind == RB_KIND_SPOT)
+                vis = shadow_visibility(uint(first), p, dist, cos_g);
+            else
+                vis = shadow_visibility(uint(first), p,
+                                        dot(p - views[first].light.xyz, views[first].axis.xyz),
+                                        cos_g);
+        }
+        if (vis <= 0.0)
+            continue;
+        vec3 f = rb_brdf(n, v, l, c_diff, spec.rgb, emission.w, spec.a);
+        radiance += f * L.color.rgb * atten * ndl * vis;
+    }
+    imageStore(o_direct, px, vec4(radiance, 1.0));
+}

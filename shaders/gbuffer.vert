@@ -1,0 +1,30 @@
+// gbuffer: world-space vertices (from animate) to clip space, with the previous frame's
+// position for motion vectors.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "shared.h"
+
+layout(std140, binding = 0) uniform Globals { rb_gpu_globals g; };
+layout(std430, binding = 1) readonly buffer Verts { rb_gpu_vertex verts[]; };
+layout(std430, binding = 2) readonly buffer Prev { rb_gpu_vertex prev[]; };
+
+layout(location = 0) out vec3 o_pos;
+layout(location = 1) out vec3 o_normal;
+layout(location = 2) out vec4 o_tangent;
+layout(location = 3) out vec2 o_uv;
+layout(location = 4) flat out uint o_material;
+layout(location = 5) out vec4 o_clip;
+layout(location = 6) out vec4 o_prev_clip;
+
+void main()
+{
+    rb_gpu_vertex v = verts[gl_VertexIndex];
+    o_pos = v.position.xyz;
+    o_normal = v.normal.xyz;
+    o_tangent = v.tangent;
+    o_uv = v.uv.xy;
+    o_material = floatBitsToUint(v.uv.z);
+    o_clip = g.view_proj * vec4(v.position.xyz, 1.0);
+    o_prev_clip = g.prev_view_proj * vec4(prev[gl_VertexIndex].position.xyz, 1.0);
+    gl_Position = o_clip;
+}

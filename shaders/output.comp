@@ -1,0 +1,49 @@
+// output: packs the frame's layers into one buffer for a single readback, in the order
+// RB_OUT_* gives (beauty RGBA, direct, albedo, normal, depth, motion).
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "shared.h"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(std140, binding = 0) uniform Globals { rb_gpu_globals g; };
+layout(binding = 1, rgba32f) uniform readonly image2D beauty;
+layout(binding = 2, rgba32f) uniform readonly image2D direct;
+layout(binding = 3, rgba32f) uniform readonly image2D gb_albedo;
+layout(binding = 4, rgba32f) uniform readonly image2D gb_normal;
+layout(binding = 5, rgba32f) uniform readonly image2D gb_position;
+layout(binding = 6, rgba32f) uniform readonly image2D gb_motion;
+layout(std430, binding = 7) writeonly buffer Out { float o[]; };
+
+void main()
+{
+    uvec2 px = gl_GlobalInvocationID.xy;
+    if (any(greaterThanEqual(px, g.size.xy)))
+        return;
+    ivec2 ip = ivec2(px);
+    vec4 pos = imageLoad(gb_position, ip);
+    bool hit = pos.w > 0.0;
+    vec4 b = imageLoad(beauty, ip);
+    vec3 d = imageLoad(direct, ip).rgb;
+    vec3 a = hit ? imageLoad(gb_albedo, ip).rgb : vec3(0.0);
+    vec3 n = hit ? imageLoad(gb_normal, ip).xyz : vec3(0.0);
+    vec2 m = hit ? imageLoad(gb_motion, ip).xy : vec2(0.0);
+    uint base = (px.y * g.size.x + px.x) * RB_OUT_FLOATS;
+    o[base + RB_OUT_BEAUTY + 0] = b.r;
+    o[base + RB_OUT_BEAUTY + 1] = b.g;
+    o[base + RB_OUT_BEAUTY + 2] = b.b;
+    o[base + RB_OUT_BEAUTY + 3] = hit ? 1.0 : 0.0;
+    o[base + RB_OUT_DIRECT + 0] = d.r;
+    o[base + RB_OUT_DIRECT + 1] = d.g;
+    o[base + RB_OUT_DIRECT + 2] = d.b;
+    o[base + RB_OUT_ALBEDO + 0] = a.r;
+    o[base + RB_OUT_ALBEDO + 1] = a.g;
+    o[base + RB_OUT_ALBEDO + 2] = a.b;
+    o[base + RB_OUT_NORMAL + 0] = n.x;
+    o[base + RB_OUT_NORMAL + 1] = n.y;
+    o[base + RB_OUT_NORMAL + 2] = n.z;
+    o[base + RB_OUT_DEPTH] = hit ? pos.w : 0.0;
+    o[base + RB_OUT_MOTION + 0] = m.x;
+    o[base + RB_OUT_MOTION + 1] = m.y;
+    o[base + 15] = 0.0;
+}

@@ -1,0 +1,26 @@
+#!/bin/sh
+# Benchmark (not a test): renders the demo at 640x360 for 24 frames and prints each pass's
+# median GPU milliseconds, frames per second and peak resident memory.
+set -eu
+BUILD=${BUILD:-build}
+out=$(mktemp -d "${TMPDIR:-/tmp}/raybundle-bench.XXXXXX")
+trap 'rm -rf "$out"' EXIT
+start=$(date +%s.%N)
+/usr/bin/time -f '%M' -o "$out/rss" "$BUILD/raybundle" render jobs/demo.yaml \
+    --size 640x360 --frames 0-23 --out "$out" -q
+end=$(date +%s.%N)
+frames=24
+echo "raybundle bench: demo, 640x360, $frames frames, direct integrator"
+sed -n 's/.*"device": "\([^"]*\)".*/device: \1/p' "$out/frame.0000.timing.json" | head -n 1
+sed -n 's/.*"driver": "\([^"]*\)".*/driver: \1/p' "$out/frame.0000.timing.json" | head -n 1
+cat "$out"/frame.*.timing.json | tr '{' '\n' |
+    sed -n 's/.*"name": "\([^"]*\)", "gpu_ms": \([0-9.eE+-]*\).*/\1 \2/p' |
+    sort -k1,1 -k2,2g |
+    awk '{ v[$1, ++n[$1]] = $2; if (!($1 in seen)) { seen[$1] = 1; order[++k] = $1 } }
+         END { for (i = 1; i <= k; i++) { p = order[i]; c = n[p];
+               m = (c % 2) ? v[p, (c + 1) / 2] : (v[p, c / 2] + v[p, c / 2 + 1]) / 2;
+               printf "pass %-10s median %8.3f ms gpu\n", p, m } }'
+cat "$out"/frame.*.timing.json | sed -n 's/.*"wall_ms": \([0-9.eE+-]*\).*/\1/p' | sort -g |
+    awk '{ v[++n] = $1 } END { printf "frame wall median %.1f ms\n", (n % 2) ? v[(n + 1) / 2] : (v[n / 2] + v[n / 2 + 1]) / 2 }'
+awk -v s="$start" -v e="$end" -v f="$frames" 'BEGIN { printf "frames per second (whole run, incl. start-up and EXR writes): %.2f\n", f / (e - s) }'
+echo "peak resident memory: $(cat "$out/rss") KiB"

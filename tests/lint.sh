@@ -1,0 +1,46 @@
+#!/bin/sh
+# make lint: man pages (mandoc and man warnings), and the module include rules of STYLE.md:
+# data flows job -> scene -> passes (on gpu) -> integrators, io beside; nothing includes
+# another module's private _int.h header.
+set -u
+status=0
+for page in man/*.1 man/*.5; do
+    out=$(mandoc -T lint -W warning "$page" 2>&1) || status=1
+    [ -n "$out" ] && { echo "$out"; status=1; }
+    out=$(man --warnings -E UTF-8 -l -Tutf8 -Z "$page" 2>&1 >/dev/null)
+    [ -n "$out" ] && { echo "$page: $out"; status=1; }
+done
+
+allowed() { # module -> modules it may include
+    case $1 in
+    core) echo "core" ;;
+    job | gpu | io | reference) echo "core $1" ;;
+    scene) echo "core job scene" ;;
+    passes) echo "core gpu scene job passes" ;;
+    integrators) echo "core gpu scene job passes integrators" ;;
+    analysis) echo "core io analysis" ;;
+    *) echo "" ;;
+    esac
+}
+for f in lib/*/*.c lib/*/*.cpp lib/*/*.h; do
+    mod=$(echo "$f" | cut -d/ -f2)
+    ok=$(allowed "$mod")
+    incs=$(sed -n 's/^#include "\([a-z_]*\)\/[a-z_.]*".*/\1/p' "$f")
+    for inc in $incs; do
+        case " $ok " in
+        *" $inc "*) ;;
+        *) echo "$f: module '$mod' may not include '$inc'"; status=1 ;;
+        esac
+    done
+    for inc in $(sed -n 's/^#include "\([a-z_]*\)\/[a-z_]*_int\.h"/\1/p' "$f"); do
+        [ "$inc" = "$mod" ] || { echo "$f: includes $inc's private header"; status=1; }
+    done
+done
+for f in cmd/*.c; do
+    if grep -q '^#include "[a-z_]*/[a-z_]*_int\.h"' "$f"; then
+        echo "$f: includes a private header"
+        status=1
+    fi
+done
+[ $status -eq 0 ] && echo "lint: clean"
+exit $status
