@@ -62,6 +62,7 @@ DEPS := $(LIB_OBJ:.o=.d) $(CMD_OBJ:.o=.d) $(UNIT_BIN:=.d) $(TOOL_BIN:=.d) \
 DEPS_STAMP := $(BUILD)/.deps-ok
 
 .PHONY: all test check bench demo install uninstall clean lint format update-golden deps
+.SECONDARY: $(SPV_H)
 all: $(BUILD)/raybundle
 
 # The one place missing Debian packages get installed (scripts/install-deps.sh).

@@ -7,6 +7,13 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#ifdef __cplusplus
+extern "C" {
+#define RB_NORETURN [[noreturn]]
+#else
+#define RB_NORETURN _Noreturn
+#endif
+
 #define RB_VERSION "0.1.0"
 
 /* ---- errors ------------------------------------------------------------------------------ */
@@ -45,7 +52,7 @@ const char *rb_status_name(enum rb_status st);
 
 /* Always-on check for states that mean raybundle's own code is wrong. */
 #define RB_BUG(...) rb_bug(__FILE__, __LINE__, __VA_ARGS__)
-_Noreturn void rb_bug(const char *file, int line, const char *fmt, ...)
+RB_NORETURN void rb_bug(const char *file, int line, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
 /* ---- logging ----------------------------------------------------------------------------- */
@@ -99,7 +106,8 @@ struct rb_mat4 {
 
 static inline struct rb_vec3 rb_v3(float x, float y, float z)
 {
-    return (struct rb_vec3){x, y, z};
+    struct rb_vec3 v = {x, y, z};
+    return v;
 }
 struct rb_vec3 rb_v3_add(struct rb_vec3 a, struct rb_vec3 b);
 struct rb_vec3 rb_v3_sub(struct rb_vec3 a, struct rb_vec3 b);
@@ -141,5 +149,9 @@ static inline float rb_clampf(float x, float lo, float hi)
 {
     return x < lo ? lo : (x > hi ? hi : x);
 }
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

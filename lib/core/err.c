@@ -51,7 +51,7 @@ const char *rb_status_name(enum rb_status st)
     return "unknown status";
 }
 
-_Noreturn void rb_bug(const char *file, int line, const char *fmt, ...)
+RB_NORETURN void rb_bug(const char *file, int line, const char *fmt, ...)
 {
     va_list ap;
     fprintf(stderr, "BUG: %s:%d: ", file, line);

@@ -19,17 +19,17 @@ struct pose_impl {
     uint32_t *order;          /* nodes, parents first */
     struct rb_vec3 *t, *s;    /* per node: current local translation and scale */
     struct rb_quat *r;
-    float *weights;           /* current morph weights of the nodes that have a slot */
-    uint32_t *weight_slot;    /* per node: offset into weights, or NONE */
-    uint32_t *weight_count;   /* per node: its mesh's morph target count */
-    uint32_t *joint_block;    /* per node: offset into pub.joint_matrices, or NONE */
-    uint32_t *morph_block;    /* per node: offset into pub.morph_weights, or NONE */
-    struct box *prim_box;     /* per primitive: bounds of its vertex positions */
-    uint32_t *target_first;   /* per primitive: into target_box */
-    struct box *target_box;   /* per primitive and target: bounds of the position deltas */
-    uint32_t *joint_first;    /* per primitive: into joint_box, NONE when unskinned */
-    uint32_t *joint_count;    /* per primitive: joints with a box */
-    struct box *joint_box;    /* per primitive and joint: vertices that joint moves */
+    float *weights;         /* current morph weights of the nodes that have a slot */
+    uint32_t *weight_slot;  /* per node: offset into weights, or NONE */
+    uint32_t *weight_count; /* per node: its mesh's morph target count */
+    uint32_t *joint_block;  /* per node: offset into pub.joint_matrices, or NONE */
+    uint32_t *morph_block;  /* per node: offset into pub.morph_weights, or NONE */
+    struct box *prim_box;   /* per primitive: bounds of its vertex positions */
+    uint32_t *target_first; /* per primitive: into target_box */
+    struct box *target_box; /* per primitive and target: bounds of the position deltas */
+    uint32_t *joint_first;  /* per primitive: into joint_box, NONE when unskinned */
+    uint32_t *joint_count;  /* per primitive: joints with a box */
+    struct box *joint_box;  /* per primitive and joint: vertices that joint moves */
 };
 
 /* ---- sampling ------------------------------------------------------------------------------ */
@@ -98,8 +98,8 @@ void rb_scene_sample(const struct rb_scene_anim_sampler *s, float t, float *out)
         out[c] = h00 * a[c] + td * h10 * out_tan[c] + h01 * b[c] + td * h11 * in_tan[c];
 }
 
-void rb_scene_sample_path(const struct rb_scene_anim_sampler *s, enum rb_anim_path path,
-                          float t, float *out)
+void rb_scene_sample_path(const struct rb_scene_anim_sampler *s, enum rb_anim_path path, float t,
+                          float *out)
 {
     if (path != RB_ANIM_ROTATION || s->components != 4 || !s->key_count) {
         rb_scene_sample(s, t, out);
@@ -125,8 +125,8 @@ void rb_scene_sample_path(const struct rb_scene_anim_sampler *s, enum rb_anim_pa
 
 static struct box box_empty(void)
 {
-    return (struct box){rb_v3(INFINITY, INFINITY, INFINITY), rb_v3(-INFINITY, -INFINITY,
-                                                                    -INFINITY)};
+    return (struct box){rb_v3(INFINITY, INFINITY, INFINITY),
+                        rb_v3(-INFINITY, -INFINITY, -INFINITY)};
 }
 
 static void box_add(struct box *b, struct rb_vec3 p)
@@ -156,8 +156,8 @@ static enum rb_status prim_boxes(const struct rb_scene *scene, struct pose_impl 
     for (uint32_t p = 0; p < np; p++) {
         const struct rb_scene_primitive *pr = &scene->primitives[p];
         if (!prim_valid(scene, pr))
-            return rb_errf(err, RB_E_INVALID, "primitive %u: vertex or morph range out of "
-                           "bounds", p);
+            return rb_errf(err, RB_E_INVALID, "primitive %u: vertex or morph range out of bounds",
+                           p);
         pi->target_first[p] = (uint32_t)targets;
         targets += pr->morph_target_count;
         uint32_t mj = 0;
@@ -262,8 +262,10 @@ enum rb_status rb_scene_pose_create(const struct rb_scene *scene, struct rb_scen
         bool skinned = false, morphed = false;
         for (uint32_t p = m->first_primitive; p < m->first_primitive + m->primitive_count; p++) {
             if (scene->primitives[p].morph_target_count > m->weight_count) {
-                st = rb_errf(err, RB_E_INVALID, "mesh %u: primitive %u has more morph targets "
-                             "than the mesh has weights", node->mesh, p);
+                st = rb_errf(err, RB_E_INVALID,
+                             "mesh %u: primitive %u has more morph targets "
+                             "than the mesh has weights",
+                             node->mesh, p);
                 goto out;
             }
             skinned |= pi->joint_first[p] != NONE;
@@ -305,8 +307,7 @@ enum rb_status rb_scene_pose_create(const struct rb_scene *scene, struct rb_scen
             in->node = i;
             in->primitive = p;
             in->first_joint = pi->joint_first[p] != NONE ? pi->joint_block[i] : NONE;
-            in->first_weight = scene->primitives[p].morph_target_count ? pi->morph_block[i]
-                                                                        : NONE;
+            in->first_weight = scene->primitives[p].morph_target_count ? pi->morph_block[i] : NONE;
         }
     }
     rb_scene_evaluate(scene, NULL, 0.0, pose);
@@ -359,8 +360,8 @@ static float clip_time(const struct rb_anim_selection *sel, double duration, dou
     return (float)t;
 }
 
-static void apply_clip(const struct rb_scene *scene, const struct rb_scene_animation *a,
-                       float t, struct pose_impl *pi)
+static void apply_clip(const struct rb_scene *scene, const struct rb_scene_animation *a, float t,
+                       struct pose_impl *pi)
 {
     for (uint32_t c = 0; c < a->channel_count; c++) {
         const struct rb_scene_anim_channel *ch = &a->channels[c];
@@ -386,8 +387,7 @@ static void apply_clip(const struct rb_scene *scene, const struct rb_scene_anima
             pi->r[ch->node] = (struct rb_quat){v[0], v[1], v[2], v[3]};
             break;
         case RB_ANIM_WEIGHTS:
-            if (pi->weight_slot[ch->node] == NONE ||
-                s->components != pi->weight_count[ch->node])
+            if (pi->weight_slot[ch->node] == NONE || s->components != pi->weight_count[ch->node])
                 break;
             rb_scene_sample(s, t, pi->weights + pi->weight_slot[ch->node]);
             break;
@@ -399,8 +399,8 @@ static struct box transform_box(const struct box *b, const struct rb_mat4 *m)
 {
     struct box o = box_empty();
     for (int i = 0; i < 8; i++) {
-        struct rb_vec3 p = rb_v3(i & 1 ? b->hi.x : b->lo.x, i & 2 ? b->hi.y : b->lo.y,
-                                 i & 4 ? b->hi.z : b->lo.z);
+        struct rb_vec3 p =
+            rb_v3(i & 1 ? b->hi.x : b->lo.x, i & 2 ? b->hi.y : b->lo.y, i & 4 ? b->hi.z : b->lo.z);
         box_add(&o, rb_mat4_point(m, p));
     }
     return o;
@@ -431,8 +431,8 @@ void rb_scene_evaluate(const struct rb_scene *scene, const struct rb_anim_select
         pi->r[i] = node->rotation;
         pi->s[i] = node->scale;
         if (pi->weight_slot[i] != NONE) {
-            const float *rest = node->weights ? node->weights
-                                              : scene->meshes[node->mesh].default_weights;
+            const float *rest =
+                node->weights ? node->weights : scene->meshes[node->mesh].default_weights;
             float *w = pi->weights + pi->weight_slot[i];
             for (uint32_t k = 0; k < pi->weight_count[i]; k++)
                 w[k] = rest ? rest[k] : 0.0f;

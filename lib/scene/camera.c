@@ -97,10 +97,10 @@ static struct rb_vec3 catmull_rom(struct rb_vec3 p0, double t0, struct rb_vec3 p
                                   float u)
 {
     float dt = (float)(t2 - t1);
-    struct rb_vec3 m1 = t2 > t0 ? rb_v3_scale(rb_v3_sub(p2, p0), (float)(1.0 / (t2 - t0)))
-                                : rb_v3(0, 0, 0);
-    struct rb_vec3 m2 = t3 > t1 ? rb_v3_scale(rb_v3_sub(p3, p1), (float)(1.0 / (t3 - t1)))
-                                : rb_v3(0, 0, 0);
+    struct rb_vec3 m1 =
+        t2 > t0 ? rb_v3_scale(rb_v3_sub(p2, p0), (float)(1.0 / (t2 - t0))) : rb_v3(0, 0, 0);
+    struct rb_vec3 m2 =
+        t3 > t1 ? rb_v3_scale(rb_v3_sub(p3, p1), (float)(1.0 / (t3 - t1))) : rb_v3(0, 0, 0);
     float u2 = u * u, u3 = u2 * u;
     float h00 = 2 * u3 - 3 * u2 + 1, h10 = u3 - 2 * u2 + u, h01 = -2 * u3 + 3 * u2;
     float h11 = u3 - u2;
@@ -144,8 +144,8 @@ static void key_camera(const struct rb_job *job, const struct rb_scene_pose *pos
             double tp = i > 0 ? p->t_s : a->t_s - dt, tq = i + 2 < n ? q->t_s : b->t_s + dt;
             eye = catmull_rom(v3a(p->position), tp, v3a(a->position), a->t_s, v3a(b->position),
                               b->t_s, v3a(q->position), tq, u);
-            at = catmull_rom(v3a(p->look_at), tp, v3a(a->look_at), a->t_s, v3a(b->look_at),
-                             b->t_s, v3a(q->look_at), tq, u);
+            at = catmull_rom(v3a(p->look_at), tp, v3a(a->look_at), a->t_s, v3a(b->look_at), b->t_s,
+                             v3a(q->look_at), tq, u);
         }
     }
     if (!(rb_v3_length(rb_v3_sub(at, eye)) > 1e-12f))

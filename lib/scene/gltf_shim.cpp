@@ -2,12 +2,7 @@
 // TINYGLTF_IMPLEMENTATION is not defined here). It parses a file and mirrors the tinygltf::Model
 // into the plain structs of gltf_shim.h; scene.c validates and converts them. No policy here.
 
-// core.h is written in C: give C++ a spelling of _Noreturn and C linkage for its functions.
-#define _Noreturn [[noreturn]]
-extern "C" {
 #include "core/core.h"
-}
-#undef _Noreturn
 
 #include "scene/gltf_shim.h"
 
@@ -166,6 +161,21 @@ void mirror(Doc &d)
             es->Get("emissiveStrength").IsNumber()) {
             o.has_emissive_strength = true;
             o.emissive_strength = es->Get("emissiveStrength").GetNumberAsDouble();
+        }
+        const tinygltf::Value *sp = find_ext(mat.extensions, "KHR_materials_specular");
+        if (sp && sp->IsObject()) {
+            o.has_specular = true;
+            o.specular_factor = 1.0;
+            o.specular_color[0] = o.specular_color[1] = o.specular_color[2] = 1.0;
+            if (sp->Has("specularFactor") && sp->Get("specularFactor").IsNumber())
+                o.specular_factor = sp->Get("specularFactor").GetNumberAsDouble();
+            const tinygltf::Value &sc = sp->Get("specularColorFactor");
+            if (sc.IsArray() && sc.ArrayLen() == 3)
+                for (int k = 0; k < 3; k++)
+                    if (sc.Get(k).IsNumber())
+                        o.specular_color[k] = sc.Get(k).GetNumberAsDouble();
+            o.has_specular_textures = sp->Has("specularTexture") ||
+                                      sp->Has("specularColorTexture");
         }
         o.alpha_mode = mat.alphaMode.c_str();
         o.alpha_cutoff = mat.alphaCutoff;

@@ -78,6 +78,10 @@ struct rb_gltf_material {
     struct rb_gltf_texture_ref emissive_tex;
     bool has_emissive_strength; /* KHR_materials_emissive_strength */
     double emissive_strength;
+    bool has_specular;          /* KHR_materials_specular */
+    double specular_factor;
+    double specular_color[3];
+    bool has_specular_textures; /* its textures, which are not supported */
     const char *alpha_mode;
     double alpha_cutoff;
     bool double_sided;
@@ -125,7 +129,7 @@ struct rb_gltf_skin {
 };
 
 struct rb_gltf_camera {
-    const char *name, *type; /* "perspective" or "orthographic" */
+    const char *name, *type;          /* "perspective" or "orthographic" */
     double aspect, yfov, znear, zfar; /* perspective */
     double xmag, ymag, ortho_znear, ortho_zfar;
 };

@@ -49,8 +49,8 @@ uint32_t rb_scene_world_lights(const struct rb_job *job, const struct rb_scene *
         struct rb_world_light l = {
             .type = jl->type,
             .position = rb_v3(jl->position[0], jl->position[1], jl->position[2]),
-            .direction = rb_v3_normalize(rb_v3(jl->direction[0], jl->direction[1],
-                                               jl->direction[2])),
+            .direction =
+                rb_v3_normalize(rb_v3(jl->direction[0], jl->direction[1], jl->direction[2])),
             .color = {jl->color[0] * jl->intensity, jl->color[1] * jl->intensity,
                       jl->color[2] * jl->intensity},
             .range = jl->range,
@@ -76,8 +76,10 @@ uint32_t rb_scene_world_lights(const struct rb_job *job, const struct rb_scene *
             .direction = rb_v3(0, -1, 0),
             .color = {i, i, i},
         };
-        rb_log(RB_LOG_INFO, "no lights in the scene or the job: a default point light at "
-               "(%g, %g, %g), intensity %g", p.x, p.y, p.z, i);
+        rb_log(RB_LOG_INFO,
+               "no lights in the scene or the job: a default point light at "
+               "(%g, %g, %g), intensity %g",
+               p.x, p.y, p.z, i);
         put(out, cap, &n, &l);
     }
     return n;
@@ -108,10 +110,9 @@ enum rb_status rb_scene_select_clips(const struct rb_scene *scene, const struct 
             size_t len = 0;
             for (uint32_t k = 0; k < scene->animation_count && len < sizeof(list); k++) {
                 const char *an = scene->animations[k].name;
-                int w = an && *an ? snprintf(list + len, sizeof(list) - len, "%s%s",
-                                             k ? ", " : "", an)
-                                  : snprintf(list + len, sizeof(list) - len, "%s#%u",
-                                             k ? ", " : "", k);
+                int w = an && *an
+                            ? snprintf(list + len, sizeof(list) - len, "%s%s", k ? ", " : "", an)
+                            : snprintf(list + len, sizeof(list) - len, "%s#%u", k ? ", " : "", k);
                 len += w > 0 ? (size_t)w : 0;
             }
             return rb_errf(err, RB_E_INVALID, "animation clip '%s' not found (scene has: %s)",

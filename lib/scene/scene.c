@@ -64,8 +64,7 @@ struct conv {
 
 /* ---- small helpers ------------------------------------------------------------------------- */
 
-const char *rb_scene_label(char *buf, size_t size, const char *kind, const char *name,
-                           size_t index)
+const char *rb_scene_label(char *buf, size_t size, const char *kind, const char *name, size_t index)
 {
     if (name && *name)
         snprintf(buf, size, "%s '%s'", kind, name);
@@ -92,6 +91,15 @@ static bool grow(void **p, size_t *cap, size_t need, size_t elem)
     *p = q;
     *cap = n;
     return true;
+}
+
+static void shrink(void **p, size_t count, size_t elem)
+{
+    if (*p && count) {
+        void *q = realloc(*p, count * elem);
+        if (q)
+            *p = q;
+    }
 }
 
 static char *dup_name(const char *s)
@@ -249,13 +257,12 @@ static enum rb_status acc_open(struct conv *c, int32_t index, int32_t want_type,
         return rb_errf(c->err, RB_E_PARSE, "accessor %d: expected %s, found %s", index,
                        type_name(want_type), type_name(a->type));
     if (a->count > MAX_ACCESSOR_COUNT)
-        return rb_errf(c->err, RB_E_PARSE, "accessor %d: count %zu is too large", index,
-                       a->count);
+        return rb_errf(c->err, RB_E_PARSE, "accessor %d: count %zu is too large", index, a->count);
     size_t elem = (size_t)v->comps * v->csize;
     if (a->buffer_view < 0) {
         if (a->buffer_view != -1)
-            return rb_errf(c->err, RB_E_PARSE, "accessor %d: buffer view %d does not exist",
-                           index, a->buffer_view);
+            return rb_errf(c->err, RB_E_PARSE, "accessor %d: buffer view %d does not exist", index,
+                           a->buffer_view);
         v->stride = elem;
         return RB_OK;
     }
@@ -331,14 +338,13 @@ static enum rb_status acc_floats(struct conv *c, int32_t index, int32_t want_typ
         for (uint32_t i = 0; !st && i < n; i++) {
             uint32_t e = read_uint(idx + (size_t)i * isize, a->sparse_indices_component_type);
             if (e >= v->count) {
-                st = rb_errf(c->err, RB_E_PARSE, "accessor %d: sparse index %u out of range",
-                             index, e);
+                st = rb_errf(c->err, RB_E_PARSE, "accessor %d: sparse index %u out of range", index,
+                             e);
                 break;
             }
             for (uint32_t k = 0; k < v->comps; k++)
-                f[(size_t)e * v->comps + k] =
-                    read_float(val + ((size_t)i * v->comps + k) * v->csize, a->component_type,
-                               a->normalized);
+                f[(size_t)e * v->comps + k] = read_float(
+                    val + ((size_t)i * v->comps + k) * v->csize, a->component_type, a->normalized);
         }
         if (st) {
             free(f);
@@ -351,7 +357,7 @@ static enum rb_status acc_floats(struct conv *c, int32_t index, int32_t want_typ
 
 /* Decodes an unsigned-integer accessor (indices, joints) into count * comps values. */
 static enum rb_status acc_uints(struct conv *c, int32_t index, int32_t want_type, uint32_t **out,
-                               struct acc *v)
+                                struct acc *v)
 {
     enum rb_status st = acc_open(c, index, want_type, v);
     if (st)
@@ -360,9 +366,8 @@ static enum rb_status acc_uints(struct conv *c, int32_t index, int32_t want_type
     int32_t ct = a->component_type;
     if ((ct != CT_UBYTE && ct != CT_USHORT && ct != CT_UINT) || a->normalized)
         return rb_errf(c->err, RB_E_PARSE,
-                       "accessor %d: expected unsigned byte, short or int components, found "
-                       "component type %d%s",
-                       index, ct, a->normalized ? " (normalized)" : "");
+                       "accessor %d: expected unsigned integers, found component type %d%s", index,
+                       ct, a->normalized ? " (normalized)" : "");
     uint32_t *u = calloc(v->count ? v->count * v->comps : 1, sizeof(uint32_t));
     if (!u)
         return rb_errf(c->err, RB_E_NOMEM, "accessor %d: out of memory", index);
@@ -379,8 +384,8 @@ static enum rb_status acc_uints(struct conv *c, int32_t index, int32_t want_type
         for (uint32_t i = 0; !st && i < n; i++) {
             uint32_t e = read_uint(idx + (size_t)i * isize, a->sparse_indices_component_type);
             if (e >= v->count) {
-                st = rb_errf(c->err, RB_E_PARSE, "accessor %d: sparse index %u out of range",
-                             index, e);
+                st = rb_errf(c->err, RB_E_PARSE, "accessor %d: sparse index %u out of range", index,
+                             e);
                 break;
             }
             for (uint32_t k = 0; k < v->comps; k++)
@@ -411,9 +416,7 @@ static enum rb_status convert_image(struct conv *c, int32_t index, struct rb_sce
     const struct rb_gltf_image *im = &c->doc->images[index];
     char what[160];
     LABEL(what, "image", im->name && *im->name ? im->name : im->uri, (size_t)index);
-    t->name = rb_strdup(im->name && *im->name ? im->name
-                        : im->uri && *im->uri ? im->uri
-                                              : what);
+    t->name = rb_strdup(im->name && *im->name ? im->name : im->uri && *im->uri ? im->uri : what);
     if (!t->name)
         return rb_errf(c->err, RB_E_NOMEM, "%s: out of memory", what);
     if (!im->pixels || im->width < 1 || im->height < 1)
@@ -481,9 +484,12 @@ static enum rb_status convert_textures(struct conv *c)
         int32_t src = d->textures[i].source;
         if (!valid_index(src, d->image_count)) {
             char what[160];
-            st = rb_errf(c->err, RB_E_UNSUPPORTED,
-                         "%s: no image source %d (only PNG/JPEG images are supported)",
-                         LABEL(what, "texture", d->textures[i].name, i), src);
+            LABEL(what, "texture", d->textures[i].name, i);
+            if (src == -1)
+                st = rb_errf(c->err, RB_E_UNSUPPORTED,
+                             "%s: no image source (only PNG and JPEG images are supported)", what);
+            else
+                st = rb_errf(c->err, RB_E_PARSE, "%s: image %d does not exist", what, src);
             goto out;
         }
         if (c->image_texture[src] == NONE)
@@ -513,11 +519,10 @@ static enum rb_status texture_index(struct conv *c, const struct rb_gltf_texture
     if (r->index == -1)
         return RB_OK;
     if (!valid_index(r->index, c->doc->texture_count))
-        return rb_errf(c->err, RB_E_PARSE, "%s: %s texture %d does not exist", mat, slot,
-                       r->index);
+        return rb_errf(c->err, RB_E_PARSE, "%s: %s texture %d does not exist", mat, slot, r->index);
     if (r->tex_coord != 0)
-        rb_log(RB_LOG_WARN, "%s: %s texture uses TEXCOORD_%d; only TEXCOORD_0 is supported",
-               mat, slot, r->tex_coord);
+        rb_log(RB_LOG_WARN, "%s: %s texture uses TEXCOORD_%d; only TEXCOORD_0 is supported", mat,
+               slot, r->tex_coord);
     if (r->has_transform)
         rb_log(RB_LOG_WARN, "%s: %s texture: KHR_texture_transform is ignored", mat, slot);
     /* convert_textures resolved every used texture to an image that has a scene texture. */
@@ -549,6 +554,11 @@ static enum rb_status convert_materials(struct conv *c)
         double strength = g->has_emissive_strength ? g->emissive_strength : 1.0;
         for (int k = 0; k < 3; k++)
             m->emissive[k] = (float)(g->emissive[k] * strength);
+        m->specular_factor = g->has_specular ? (float)g->specular_factor : 1.0f;
+        for (int k = 0; k < 3; k++)
+            m->specular_color[k] = g->has_specular ? (float)g->specular_color[k] : 1.0f;
+        if (g->has_specular_textures)
+            rb_log(RB_LOG_WARN, "%s: KHR_materials_specular textures are ignored", what);
         m->metallic = (float)g->metallic;
         m->roughness = (float)g->roughness;
         m->normal_scale = (float)g->normal_scale;
@@ -565,8 +575,8 @@ static enum rb_status convert_materials(struct conv *c)
                    g->alpha_mode);
             m->alpha_mode = RB_ALPHA_OPAQUE;
         }
-        enum rb_status st = texture_index(c, &g->base_color_tex, what, "baseColor",
-                                          &m->base_color_tex);
+        enum rb_status st =
+            texture_index(c, &g->base_color_tex, what, "baseColor", &m->base_color_tex);
         if (!st)
             st = texture_index(c, &g->metallic_roughness_tex, what, "metallicRoughness",
                                &m->metallic_roughness_tex);
@@ -590,6 +600,8 @@ static enum rb_status convert_materials(struct conv *c)
         .normal_scale = 1.0f,
         .emissive_tex = NONE,
         .alpha_cutoff = 0.5f,
+        .specular_factor = 1.0f,
+        .specular_color = {1, 1, 1},
     };
     if (!m->name)
         return rb_errf(c->err, RB_E_NOMEM, "out of memory");
@@ -722,8 +734,7 @@ static enum rb_status convert_geometry(struct conv *c, const struct rb_gltf_prim
         ni = v.count;
         for (size_t i = 0; i < ni; i++)
             if (src[i] >= n) {
-                st = rb_errf(c->err, RB_E_PARSE, "index %u out of range (%zu vertices)", src[i],
-                             n);
+                st = rb_errf(c->err, RB_E_PARSE, "index %u out of range (%zu vertices)", src[i], n);
                 goto out;
             }
     }
@@ -930,10 +941,8 @@ static enum rb_status convert_primitive(struct conv *c, size_t mesh_index, size_
     if (mode < 4 || mode > 6)
         return rb_errf(c->err, RB_E_PARSE, "%s: unknown mode %d", what, mode);
     if (gp->material != -1 && !valid_index(gp->material, d->material_count))
-        return rb_errf(c->err, RB_E_PARSE, "%s: material %d does not exist", what,
-                       gp->material);
-    uint32_t material = gp->material == -1 ? (uint32_t)d->material_count
-                                           : (uint32_t)gp->material;
+        return rb_errf(c->err, RB_E_PARSE, "%s: material %d does not exist", what, gp->material);
+    uint32_t material = gp->material == -1 ? (uint32_t)d->material_count : (uint32_t)gp->material;
 
     struct geom_key key = {.gp = gp, .prim = s->primitive_count};
     for (int a = 0; a < A_COUNT; a++)
@@ -1137,15 +1146,15 @@ static enum rb_status convert_nodes(struct conv *c)
         if (g->translation_count) {
             if (g->translation_count != 3)
                 return rb_errf(c->err, RB_E_PARSE, "%s: translation needs 3 values", what);
-            n->translation = rb_v3((float)g->translation[0], (float)g->translation[1],
-                                   (float)g->translation[2]);
+            n->translation =
+                rb_v3((float)g->translation[0], (float)g->translation[1], (float)g->translation[2]);
         }
         if (g->rotation_count) {
             if (g->rotation_count != 4)
                 return rb_errf(c->err, RB_E_PARSE, "%s: rotation needs 4 values", what);
-            n->rotation = rb_quat_normalize((struct rb_quat){
-                (float)g->rotation[0], (float)g->rotation[1], (float)g->rotation[2],
-                (float)g->rotation[3]});
+            n->rotation =
+                rb_quat_normalize((struct rb_quat){(float)g->rotation[0], (float)g->rotation[1],
+                                                   (float)g->rotation[2], (float)g->rotation[3]});
         }
         if (g->scale_count) {
             if (g->scale_count != 3)
@@ -1165,21 +1174,20 @@ static enum rb_status convert_nodes(struct conv *c)
         }
         if (g->camera != -1) {
             if (!valid_index(g->camera, d->camera_count))
-                return rb_errf(c->err, RB_E_PARSE, "%s: camera %d does not exist", what,
-                               g->camera);
+                return rb_errf(c->err, RB_E_PARSE, "%s: camera %d does not exist", what, g->camera);
             n->camera = (uint32_t)g->camera;
         }
         if (g->light != -1) {
             if (!valid_index(g->light, d->light_count))
-                return rb_errf(c->err, RB_E_PARSE, "%s: KHR_lights_punctual light %d does not "
-                               "exist", what, g->light);
+                return rb_errf(c->err, RB_E_PARSE,
+                               "%s: KHR_lights_punctual light %d does not exist", what, g->light);
             n->light = (uint32_t)g->light;
         }
         if (g->weight_count) {
             uint32_t want = n->mesh != NONE ? s->meshes[n->mesh].weight_count : 0;
             if (g->weight_count != want)
-                return rb_errf(c->err, RB_E_PARSE, "%s: %zu weights for %u morph targets",
-                               what, g->weight_count, want);
+                return rb_errf(c->err, RB_E_PARSE, "%s: %zu weights for %u morph targets", what,
+                               g->weight_count, want);
             n->weights = malloc(want * sizeof(float));
             if (!n->weights)
                 return rb_errf(c->err, RB_E_NOMEM, "out of memory");
@@ -1191,8 +1199,8 @@ static enum rb_status convert_nodes(struct conv *c)
             if (!valid_index(ch, d->node_count))
                 return rb_errf(c->err, RB_E_PARSE, "%s: child %d does not exist", what, ch);
             if (s->nodes[ch].parent != NONE || (size_t)ch == i)
-                return rb_errf(c->err, RB_E_PARSE, "%s: node %d has more than one parent",
-                               what, ch);
+                return rb_errf(c->err, RB_E_PARSE, "%s: node %d has more than one parent", what,
+                               ch);
             s->nodes[ch].parent = (uint32_t)i;
         }
     }
@@ -1298,8 +1306,8 @@ static enum rb_status convert_skins(struct conv *c)
                 char a[160], b[160], e[160];
                 return rb_errf(c->err, RB_E_PARSE, "%s: %s uses joint %u but %s has %u joints",
                                LABEL(a, "node", n->name, i), LABEL(b, "mesh", m->name, n->mesh),
-                               c->prim_joints[p] - 1, LABEL(e, "skin", s->skins[n->skin].name,
-                                                            n->skin),
+                               c->prim_joints[p] - 1,
+                               LABEL(e, "skin", s->skins[n->skin].name, n->skin),
                                s->skins[n->skin].joint_count);
             }
     }
@@ -1369,8 +1377,8 @@ static enum rb_status convert_cameras_lights(struct conv *c)
         if (l->type == RB_LIGHT_SPOT &&
             !(l->inner_cone_rad >= 0 && l->inner_cone_rad < l->outer_cone_rad &&
               l->outer_cone_rad <= RB_PI / 2 + 1e-6f))
-            return rb_errf(c->err, RB_E_PARSE, "%s: need 0 <= innerConeAngle < outerConeAngle "
-                           "<= pi/2", what);
+            return rb_errf(c->err, RB_E_PARSE,
+                           "%s: need 0 <= innerConeAngle < outerConeAngle <= pi/2", what);
     }
     return RB_OK;
 }
@@ -1405,8 +1413,8 @@ static enum rb_status convert_sampler(struct conv *c, const struct rb_gltf_anim_
     size_t elems = out.count * out.comps, per = in.count * mult;
     if (elems == 0 || elems % per)
         return rb_errf(c->err, RB_E_PARSE,
-                       "output accessor %d has %zu values, not a multiple of %zu keys%s",
-                       g->output, elems, in.count, mult == 3 ? " x 3" : "");
+                       "output accessor %d has %zu values, not a multiple of %zu keys%s", g->output,
+                       elems, in.count, mult == 3 ? " x 3" : "");
     o->components = (uint32_t)(elems / per);
     return RB_OK;
 }
@@ -1452,16 +1460,17 @@ static enum rb_status convert_animations(struct conv *c)
             } else if (!strcmp(gc->path, "weights")) {
                 path = RB_ANIM_WEIGHTS;
             } else {
-                rb_log(RB_LOG_WARN, "%s channel %zu: path '%s' is not supported; ignored", what,
-                       k, gc->path);
+                rb_log(RB_LOG_WARN, "%s channel %zu: path '%s' is not supported; ignored", what, k,
+                       gc->path);
                 continue;
             }
             if (gc->node == -1) /* targeted by an extension we do not know */
                 continue;
             if (!valid_index(gc->node, s->node_count) ||
                 !valid_index(gc->sampler, g->sampler_count))
-                return rb_errf(c->err, RB_E_PARSE, "%s channel %zu: node %d or sampler %d does "
-                               "not exist", what, k, gc->node, gc->sampler);
+                return rb_errf(c->err, RB_E_PARSE,
+                               "%s channel %zu: node %d or sampler %d does not exist", what, k,
+                               gc->node, gc->sampler);
             uint32_t comps = a->samplers[gc->sampler].components, want = 3;
             if (path == RB_ANIM_ROTATION)
                 want = 4;
@@ -1469,8 +1478,9 @@ static enum rb_status convert_animations(struct conv *c)
                 uint32_t mesh = s->nodes[gc->node].mesh;
                 want = mesh != NONE ? s->meshes[mesh].weight_count : 0;
                 if (!want) {
-                    rb_log(RB_LOG_WARN, "%s channel %zu: weights of a node without morph "
-                           "targets; ignored", what, k);
+                    rb_log(RB_LOG_WARN,
+                           "%s channel %zu: weights of a node without morph targets; ignored", what,
+                           k);
                     continue;
                 }
             }
@@ -1492,7 +1502,8 @@ static enum rb_status check_extensions(struct conv *c)
     const struct rb_gltf_doc *d = c->doc;
     for (size_t i = 0; i < d->extensions_required_count; i++) {
         const char *e = d->extensions_required[i];
-        if (!strcmp(e, "KHR_lights_punctual") || !strcmp(e, "KHR_materials_emissive_strength"))
+        if (!strcmp(e, "KHR_lights_punctual") || !strcmp(e, "KHR_materials_emissive_strength") ||
+            !strcmp(e, "KHR_materials_specular"))
             continue;
         if (!strcmp(e, "KHR_texture_transform")) {
             rb_log(RB_LOG_WARN, "'%s': required extension KHR_texture_transform is ignored",
@@ -1533,9 +1544,15 @@ enum rb_status rb_scene_load(const char *path, struct rb_scene **out, struct rb_
      * skins need nodes and per-primitive joint ranges, channels need nodes and meshes. */
     if ((st = check_extensions(&c)) || (st = convert_textures(&c)) ||
         (st = convert_materials(&c)) || (st = convert_meshes(&c)) || (st = convert_nodes(&c)) ||
-        (st = mark_in_scene(&c)) || (st = convert_skins(&c)) ||
-        (st = convert_cameras_lights(&c)) || (st = convert_animations(&c)))
+        (st = mark_in_scene(&c)) || (st = convert_skins(&c)) || (st = convert_cameras_lights(&c)) ||
+        (st = convert_animations(&c)))
         goto out;
+    /* The growth slack can be half the arrays: give it back (a failed shrink keeps them). */
+    shrink((void **)&c.s->vertices, c.s->vertex_count, sizeof(struct rb_scene_vertex));
+    shrink((void **)&c.s->indices, c.s->index_count, sizeof(uint32_t));
+    shrink((void **)&c.s->morph_deltas, c.s->morph_delta_count,
+           sizeof(struct rb_scene_morph_delta));
+    shrink((void **)&c.s->primitives, c.s->primitive_count, sizeof(struct rb_scene_primitive));
     if (!c.s->vertices) { /* keep every array non-NULL for the GPU upload's sake */
         c.s->vertices = calloc(1, sizeof(struct rb_scene_vertex));
         c.s->indices = calloc(1, sizeof(uint32_t));
@@ -1669,9 +1686,4 @@ out:
     free(head);
     free(next);
     return st;
-}
-
-struct rb_mat4 rb_scene_node_local(const struct rb_scene_node *node)
-{
-    return rb_mat4_trs(node->translation, node->rotation, node->scale);
 }

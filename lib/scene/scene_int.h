@@ -14,7 +14,4 @@ enum rb_status rb_scene_node_order(const struct rb_scene *scene, uint32_t *order
 const char *rb_scene_label(char *buf, size_t size, const char *kind, const char *name,
                            size_t index);
 
-/* The local transform of a node as a matrix (T * R * S). */
-struct rb_mat4 rb_scene_node_local(const struct rb_scene_node *node);
-
 #endif

@@ -36,4 +36,12 @@ rb render "$T/spot.yaml" -q
 expect_exit 0 "spot-light job renders"
 tap_run "$BUILD/tests/tools/analytic" spot "$T/spot/frame.0000.exr"
 
+# The same light over glossy floors: the glTF BRDF (GGX, Smith, Schlick) within 1%.
+for m in glossy metal; do
+    sed -e "s/plane.gltf/$m.gltf/" -e "s/output: point/output: $m/" "$T/point.yaml" >"$T/$m.yaml"
+    rb render "$T/$m.yaml" -q
+    expect_exit 0 "$m floor renders"
+    tap_run "$BUILD/tests/tools/analytic" $m "$T/$m/frame.0000.exr"
+done
+
 done_testing

@@ -6,6 +6,9 @@
  *                              within 1% on lit floor pixels, 0 inside the occluder's shadow
  *   analytic spot EXR          checks the spot-light render: lit inside the inner cone, dark
  *                              outside the outer cone
+ *   analytic glossy|metal EXR  checks glossy.gltf (dielectric, roughness 0.4) and metal.gltf
+ *                              (metallic, roughness 0.5) under the point light against the glTF
+ *                              BRDF evaluated here in double precision
  * The camera and lights are those of tests/integration/t0040-analytic.sh; the ray for a pixel
  * is computed here independently of the renderer (double precision, own look-at). Prints TAP. */
 #include <math.h>
@@ -99,7 +102,31 @@ static double lambert(const double light[3], double intensity, const double p[3]
     return intensity * cos_t / r2 * albedo / PI;
 }
 
-static int write_scene(const char *dir)
+/* The glTF 2.0 metallic-roughness BRDF (spec appendix B) times cos, written here in double
+ * independently of the shaders: Lambert + GGX, Smith height-correlated, Schlick. */
+static double gltf_brdf_cos(double metallic, double roughness, const double n[3],
+                            const double v[3], const double l[3])
+{
+    double h[3] = {v[0] + l[0], v[1] + l[1], v[2] + l[2]};
+    normalize(h);
+    double ndl = n[0] * l[0] + n[1] * l[1] + n[2] * l[2];
+    double ndv = n[0] * v[0] + n[1] * v[1] + n[2] * v[2];
+    double ndh = n[0] * h[0] + n[1] * h[1] + n[2] * h[2];
+    double vdh = v[0] * h[0] + v[1] * h[1] + v[2] * h[2];
+    if (ndl <= 0.0)
+        return 0.0;
+    double a = roughness * roughness, a2 = a * a;
+    double f0 = 0.04 * (1.0 - metallic) + albedo * metallic;
+    double F = f0 + (1.0 - f0) * pow(1.0 - vdh, 5.0);
+    double dd = ndh * ndh * (a2 - 1.0) + 1.0;
+    double D = a2 / (PI * dd * dd);
+    double V = 0.5 / (ndl * sqrt(ndv * ndv * (1.0 - a2) + a2) + ndv * sqrt(ndl * ndl * (1.0 - a2) + a2));
+    double c_diff = albedo * (1.0 - metallic);
+    return ((1.0 - F) * c_diff / PI + F * D * V) * ndl;
+}
+
+static int write_scene(const char *dir, const char *name, double metallic, double roughness,
+                       int lambert)
 {
     /* Two quads: floor (4 verts) and occluder (4 verts), normals +Y, indices 6 each. */
     float pos[8][3] = {{-10, 0, -10}, {10, 0, -10}, {10, 0, 10}, {-10, 0, 10},
@@ -129,7 +156,7 @@ static int write_scene(const char *dir)
     }
     enc[e] = '\0';
     char path[4096];
-    snprintf(path, sizeof(path), "%s/plane.gltf", dir);
+    snprintf(path, sizeof(path), "%s/%s", dir, name);
     FILE *f = fopen(path, "w");
     if (!f) {
         perror(path);
@@ -143,10 +170,9 @@ static int write_scene(const char *dir)
             "\"indices\":4,\"material\":0}]},"
             "{\"primitives\":[{\"attributes\":{\"POSITION\":1,\"NORMAL\":3},\"indices\":5,"
             "\"material\":0}]}],"
-            "\"materials\":[{\"name\":\"Lambert\",\"doubleSided\":true,"
-            "\"pbrMetallicRoughness\":{\"baseColorFactor\":[%g,%g,%g,1],\"metallicFactor\":0,"
-            "\"roughnessFactor\":1},\"extensions\":{\"KHR_materials_specular\":"
-            "{\"specularFactor\":0}}}],"
+            "\"materials\":[{\"name\":\"Floor\",\"doubleSided\":true,"
+            "\"pbrMetallicRoughness\":{\"baseColorFactor\":[%g,%g,%g,1],\"metallicFactor\":%g,"
+            "\"roughnessFactor\":%g}%s}],"
             "\"buffers\":[{\"byteLength\":%zu,\"uri\":\"data:application/octet-stream;base64,%s\"}],"
             "\"bufferViews\":[{\"buffer\":0,\"byteOffset\":0,\"byteLength\":96},"
             "{\"buffer\":0,\"byteOffset\":96,\"byteLength\":96},"
@@ -161,7 +187,9 @@ static int write_scene(const char *dir)
             "{\"bufferView\":2,\"byteOffset\":0,\"componentType\":5123,\"count\":6,\"type\":\"SCALAR\"},"
             "{\"bufferView\":2,\"byteOffset\":12,\"componentType\":5123,\"count\":6,\"type\":\"SCALAR\"}"
             "]}\n",
-            albedo, albedo, albedo, sizeof(buf), enc);
+            albedo, albedo, albedo, metallic, roughness,
+            lambert ? ",\"extensions\":{\"KHR_materials_specular\":{\"specularFactor\":0}}" : "",
+            sizeof(buf), enc);
     return fclose(f) != 0;
 }
 
@@ -187,6 +215,15 @@ static double lum(const struct image *im, int x, int y)
 {
     const float *p = &im->img.pixels[((size_t)y * im->img.width_px + x) * im->img.channel_count];
     return (p[im->r] + p[im->g] + p[im->b]) / 3.0;
+}
+
+/* Whether the camera sees the occluder quad (y = 1, x 1.25..1.75, z -0.25..0.25, grown by a
+ * margin) in front of floor point p. */
+static int behind_occluder(const double p[3])
+{
+    double s = (cam_pos[1] - 1.0) / (cam_pos[1] - p[1]);
+    double qx = cam_pos[0] + s * (p[0] - cam_pos[0]), qz = cam_pos[2] + s * (p[2] - cam_pos[2]);
+    return qx > 1.15 && qx < 1.85 && qz > -0.35 && qz < 0.35;
 }
 
 static int in_shadow(const double p[3], double margin)
@@ -215,7 +252,7 @@ static int check_point(const char *path)
             if (!floor_point(x, y, w, h, p))
                 continue;
             /* Skip the occluder's own pixels (seen from the camera) and the penumbra. */
-            if (p[0] > 0.9 && p[0] < 2.1 && fabs(p[2]) < 0.9)
+            if (behind_occluder(p))
                 continue;
             double got = lum(&im, x, y);
             if (in_shadow(p, 0.1)) {
@@ -239,6 +276,44 @@ static int check_point(const char *path)
     check(lit > 50, "%d lit floor pixels checked against I cos/r^2 albedo/pi, worst %.3f%%", lit,
           worst * 100.0);
     check(dark > 3, "%d pixels inside the occluder's shadow are black", dark);
+    rb_io_image_release(&im.img);
+    return 0;
+}
+
+/* A glossy floor (metallic, roughness) under the point light: every checked pixel within 1% of
+ * the BRDF above. */
+static int check_brdf(const char *path, double metallic, double roughness)
+{
+    struct image im;
+    if (load(path, &im))
+        return 1;
+    int w = (int)im.img.width_px, h = (int)im.img.height_px;
+    int checked = 0, bad = 0;
+    double worst = 0.0;
+    for (int y = 2; y < h; y += 5)
+        for (int x = 2; x < w; x += 5) {
+            double p[3];
+            if (!floor_point(x, y, w, h, p) || near_shadow(p, 0.15) || behind_occluder(p))
+                continue;
+            double n[3] = {0, 1, 0}, v[3], l[3];
+            sub(cam_pos, p, v);
+            normalize(v);
+            sub(point_pos, p, l);
+            double r2 = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
+            normalize(l);
+            double want = gltf_brdf_cos(metallic, roughness, n, v, l) * point_intensity / r2;
+            double got = lum(&im, x, y);
+            double rel = fabs(got - want) / want;
+            if (rel > worst)
+                worst = rel;
+            checked++;
+            if (rel > 0.01 && bad++ < 5)
+                check(0, "pixel %d,%d (floor %.3f,%.3f): %.6g, glTF BRDF %.6g (%.2f%%)", x, y,
+                      p[0], p[2], got, want, rel * 100.0);
+        }
+    check(checked > 100 && bad == 0,
+          "metallic %g roughness %g: %d pixels match the glTF BRDF, worst %.3f%%", metallic,
+          roughness, checked, worst * 100.0);
     rb_io_image_release(&im.img);
     return 0;
 }
@@ -283,16 +358,22 @@ static int check_spot(const char *path)
 int main(int argc, char **argv)
 {
     if (argc != 3) {
-        fprintf(stderr, "usage: analytic scene DIR | point EXR | spot EXR\n");
+        fprintf(stderr, "usage: analytic scene DIR | point|spot|glossy|metal EXR\n");
         return 2;
     }
     if (strcmp(argv[1], "scene") == 0)
-        return write_scene(argv[2]);
+        return write_scene(argv[2], "plane.gltf", 0.0, 1.0, 1) ||
+               write_scene(argv[2], "glossy.gltf", 0.0, 0.4, 0) ||
+               write_scene(argv[2], "metal.gltf", 1.0, 0.5, 0);
     int rc;
     if (strcmp(argv[1], "point") == 0)
         rc = check_point(argv[2]);
     else if (strcmp(argv[1], "spot") == 0)
         rc = check_spot(argv[2]);
+    else if (strcmp(argv[1], "glossy") == 0)
+        rc = check_brdf(argv[2], 0.0, 0.4);
+    else if (strcmp(argv[1], "metal") == 0)
+        rc = check_brdf(argv[2], 1.0, 0.5);
     else
         return 2;
     printf("1..%d\n", test_no);

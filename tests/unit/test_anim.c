@@ -13,8 +13,8 @@
 
 #define NONE RB_SCENE_NONE
 
-static struct rb_scene_anim_sampler sampler(enum rb_anim_interp interp, float *times,
-                                            uint32_t keys, float *values, uint32_t comps)
+static struct rb_scene_anim_sampler sampler(enum rb_anim_interp interp, float *times, uint32_t keys,
+                                            float *values, uint32_t comps)
 {
     return (struct rb_scene_anim_sampler){.interpolation = interp,
                                           .times = times,
@@ -86,7 +86,12 @@ static void test_cubic_spline(void **state)
      * At u = 0.25: h00 = 0.84375, h10 = 0.140625, h01 = 0.15625, h11 = -0.046875, so
      * p = 0.84375 * 1 + 2 * 0.140625 * 0.5 + 0.15625 * 3 + 2 * -0.046875 * -1 = 1.546875. */
     float times[2] = {0, 2};
-    float values[6] = {/* key 0: in, value, out */ 9, 1, 0.5f, /* key 1 */ -1, 3, 9};
+    float values[6] = {/* key 0: in, value, out */ 9,
+                       1,
+                       0.5f,
+                       /* key 1 */ -1,
+                       3,
+                       9};
     struct rb_scene_anim_sampler s = sampler(RB_ANIM_CUBICSPLINE, times, 2, values, 1);
     float out;
     rb_scene_sample(&s, 0.5f, &out);
@@ -168,19 +173,31 @@ static void build(struct fixture *f)
     }
     f->deltas[0].position[2] = 2;  /* target 0 moves vertex 0 up to z = 2 */
     f->deltas[4].position[2] = -1; /* target 1 moves vertex 1 down to z = -1 */
-    f->prim = (struct rb_scene_primitive){.vertex_count = 3, .index_count = 3,
-                                          .morph_target_count = 2};
+    f->prim =
+        (struct rb_scene_primitive){.vertex_count = 3, .index_count = 3, .morph_target_count = 2};
     f->weights[0] = 0.5f;
-    f->mesh = (struct rb_scene_mesh){.name = "Tri", .primitive_count = 1,
-                                     .default_weights = f->weights, .weight_count = 2};
-    f->nodes[0] = (struct rb_scene_node){.name = "Child", .parent = 1,
-                                         .translation = {0, 1, 0}, .rotation = {0, 0, 0, 1},
-                                         .scale = {1, 1, 1}, .mesh = 0, .skin = NONE,
-                                         .camera = NONE, .light = NONE, .in_scene = true};
-    f->nodes[1] = (struct rb_scene_node){.name = "Parent", .parent = NONE,
-                                         .translation = {10, 0, 0}, .rotation = {0, 0, 0, 1},
-                                         .scale = {1, 1, 1}, .mesh = NONE, .skin = NONE,
-                                         .camera = NONE, .light = NONE, .in_scene = true};
+    f->mesh = (struct rb_scene_mesh){
+        .name = "Tri", .primitive_count = 1, .default_weights = f->weights, .weight_count = 2};
+    f->nodes[0] = (struct rb_scene_node){.name = "Child",
+                                         .parent = 1,
+                                         .translation = {0, 1, 0},
+                                         .rotation = {0, 0, 0, 1},
+                                         .scale = {1, 1, 1},
+                                         .mesh = 0,
+                                         .skin = NONE,
+                                         .camera = NONE,
+                                         .light = NONE,
+                                         .in_scene = true};
+    f->nodes[1] = (struct rb_scene_node){.name = "Parent",
+                                         .parent = NONE,
+                                         .translation = {10, 0, 0},
+                                         .rotation = {0, 0, 0, 1},
+                                         .scale = {1, 1, 1},
+                                         .mesh = NONE,
+                                         .skin = NONE,
+                                         .camera = NONE,
+                                         .light = NONE,
+                                         .in_scene = true};
     f->times[0] = 0, f->times[1] = 2;
     const float move[6] = {0, 0, 0, 4, 0, 0}, turn[8] = {0, 0, 0, 1, 0, h, 0, h};
     memcpy(f->move, move, sizeof(move));
@@ -189,14 +206,25 @@ static void build(struct fixture *f)
     f->samplers[1] = sampler(RB_ANIM_LINEAR, f->times, 2, f->turn, 4);
     f->channels[0] = (struct rb_scene_anim_channel){0, 1, RB_ANIM_TRANSLATION};
     f->channels[1] = (struct rb_scene_anim_channel){1, 0, RB_ANIM_ROTATION};
-    f->anim = (struct rb_scene_animation){.name = "Move", .samplers = f->samplers,
-                                          .sampler_count = 2, .channels = f->channels,
-                                          .channel_count = 2, .duration_s = 2};
-    f->s = (struct rb_scene){.vertices = f->verts, .vertex_count = 3, .indices = f->idx,
-                             .index_count = 3, .morph_deltas = f->deltas,
-                             .morph_delta_count = 6, .primitives = &f->prim,
-                             .primitive_count = 1, .meshes = &f->mesh, .mesh_count = 1,
-                             .nodes = f->nodes, .node_count = 2, .animations = &f->anim,
+    f->anim = (struct rb_scene_animation){.name = "Move",
+                                          .samplers = f->samplers,
+                                          .sampler_count = 2,
+                                          .channels = f->channels,
+                                          .channel_count = 2,
+                                          .duration_s = 2};
+    f->s = (struct rb_scene){.vertices = f->verts,
+                             .vertex_count = 3,
+                             .indices = f->idx,
+                             .index_count = 3,
+                             .morph_deltas = f->deltas,
+                             .morph_delta_count = 6,
+                             .primitives = &f->prim,
+                             .primitive_count = 1,
+                             .meshes = &f->mesh,
+                             .mesh_count = 1,
+                             .nodes = f->nodes,
+                             .node_count = 2,
+                             .animations = &f->anim,
                              .animation_count = 1};
 }
 
@@ -332,8 +360,8 @@ static void test_evaluate_skin(void **state)
     uint32_t joints[2] = {1, 2};
     struct rb_mat4 ibm[2] = {rb_mat4_identity(), rb_mat4_identity()};
     ibm[1].m[3][1] = -5; /* bind pose: the tip joint sat at y = 5 */
-    struct rb_scene_skin skin = {.name = "Rig", .joints = joints, .inverse_bind = ibm,
-                                 .joint_count = 2};
+    struct rb_scene_skin skin = {
+        .name = "Rig", .joints = joints, .inverse_bind = ibm, .joint_count = 2};
     f.s.skins = &skin;
     f.s.skin_count = 1;
 

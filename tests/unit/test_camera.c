@@ -26,21 +26,27 @@ struct fixture {
 static void build(struct fixture *f)
 {
     memset(f, 0, sizeof(*f));
-    f->nodes[0] = (struct rb_scene_node){.name = "Box", .parent = NONE, .rotation = {0, 0, 0, 1},
-                                         .scale = {1, 1, 1}, .mesh = NONE, .skin = NONE,
-                                         .camera = NONE, .light = NONE, .in_scene = true};
+    f->nodes[0] = (struct rb_scene_node){.name = "Box",
+                                         .parent = NONE,
+                                         .rotation = {0, 0, 0, 1},
+                                         .scale = {1, 1, 1},
+                                         .mesh = NONE,
+                                         .skin = NONE,
+                                         .camera = NONE,
+                                         .light = NONE,
+                                         .in_scene = true};
     f->nodes[1] = f->nodes[0];
     f->nodes[1].name = "Eye";
     f->nodes[1].camera = 0;
-    f->cam = (struct rb_scene_camera){.name = "Lens", .is_perspective = true, .yfov_rad = 0.7f,
-                                      .znear = 0.05f};
+    f->cam = (struct rb_scene_camera){
+        .name = "Lens", .is_perspective = true, .yfov_rad = 0.7f, .znear = 0.05f};
     f->world[0] = rb_mat4_identity();
     float h = sqrtf(0.5f);
     f->world[1] = rb_mat4_trs(rb_v3(1, 2, 3), (struct rb_quat){0, h, 0, h}, rb_v3(2, 2, 2));
-    f->pose = (struct rb_scene_pose){.node_world = f->world, .bounds_min = {-1, -1, -1},
-                                     .bounds_max = {1, 1, 1}};
-    f->s = (struct rb_scene){.nodes = f->nodes, .node_count = 2, .cameras = &f->cam,
-                             .camera_count = 1};
+    f->pose = (struct rb_scene_pose){
+        .node_world = f->world, .bounds_min = {-1, -1, -1}, .bounds_max = {1, 1, 1}};
+    f->s = (struct rb_scene){
+        .nodes = f->nodes, .node_count = 2, .cameras = &f->cam, .camera_count = 1};
     f->job.width_px = 1600;
     f->job.height_px = 900;
 }
@@ -60,11 +66,11 @@ static void assert_v3(struct rb_vec3 a, float x, float y, float z, float tol)
         fail_msg("(%g, %g, %g) != (%g, %g, %g)", a.x, a.y, a.z, x, y, z);
 }
 
-static void set_key(struct rb_job_camera_key *k, double t, float px, float py, float pz,
-                    float ax, float ay, float az, float fov)
+static void set_key(struct rb_job_camera_key *k, double t, float px, float py, float pz, float ax,
+                    float ay, float az, float fov)
 {
-    *k = (struct rb_job_camera_key){.t_s = t, .position = {px, py, pz}, .look_at = {ax, ay, az},
-                                    .fov_y_deg = fov};
+    *k = (struct rb_job_camera_key){
+        .t_s = t, .position = {px, py, pz}, .look_at = {ax, ay, az}, .fov_y_deg = fov};
 }
 
 static void test_linear_track(void **state)
@@ -136,28 +142,28 @@ static void test_catmull_rom_track(void **state)
         p[k] = rb_v3(keys[k].position[0], keys[k].position[1], keys[k].position[2]);
     float u = 0.3f, u2 = u * u, u3 = u2 * u;
     struct rb_vec3 want = rb_v3_scale(
-        rb_v3_add(rb_v3_add(rb_v3_scale(p[1], 2), rb_v3_scale(rb_v3_sub(p[2], p[0]), u)),
-                  rb_v3_add(rb_v3_scale(rb_v3_add(rb_v3_sub(rb_v3_scale(p[0], 2),
-                                                            rb_v3_scale(p[1], 5)),
-                                                  rb_v3_sub(rb_v3_scale(p[2], 4), p[3])),
-                                        u2),
-                            rb_v3_scale(rb_v3_add(rb_v3_sub(rb_v3_scale(p[1], 3), p[0]),
-                                                  rb_v3_sub(p[3], rb_v3_scale(p[2], 3))),
-                                        u3))),
+        rb_v3_add(
+            rb_v3_add(rb_v3_scale(p[1], 2), rb_v3_scale(rb_v3_sub(p[2], p[0]), u)),
+            rb_v3_add(rb_v3_scale(rb_v3_add(rb_v3_sub(rb_v3_scale(p[0], 2), rb_v3_scale(p[1], 5)),
+                                            rb_v3_sub(rb_v3_scale(p[2], 4), p[3])),
+                                  u2),
+                      rb_v3_scale(rb_v3_add(rb_v3_sub(rb_v3_scale(p[1], 3), p[0]),
+                                            rb_v3_sub(p[3], rb_v3_scale(p[2], 3))),
+                                  u3))),
         0.5f);
     struct rb_vec3 got = cr_position(&f, 1.3);
     assert_v3(got, want.x, want.y, want.z, 1e-4f);
     /* the first segment uses the first key as its own (phantom) neighbour */
     u = 0.5f;
     struct rb_vec3 first = rb_v3_scale(
-        rb_v3_add(rb_v3_add(rb_v3_scale(p[0], 2), rb_v3_scale(rb_v3_sub(p[1], p[0]), u)),
-                  rb_v3_add(rb_v3_scale(rb_v3_add(rb_v3_sub(rb_v3_scale(p[0], 2),
-                                                            rb_v3_scale(p[0], 5)),
-                                                  rb_v3_sub(rb_v3_scale(p[1], 4), p[2])),
-                                        u * u),
-                            rb_v3_scale(rb_v3_add(rb_v3_sub(rb_v3_scale(p[0], 3), p[0]),
-                                                  rb_v3_sub(p[2], rb_v3_scale(p[1], 3))),
-                                        u * u * u))),
+        rb_v3_add(
+            rb_v3_add(rb_v3_scale(p[0], 2), rb_v3_scale(rb_v3_sub(p[1], p[0]), u)),
+            rb_v3_add(rb_v3_scale(rb_v3_add(rb_v3_sub(rb_v3_scale(p[0], 2), rb_v3_scale(p[0], 5)),
+                                            rb_v3_sub(rb_v3_scale(p[1], 4), p[2])),
+                                  u * u),
+                      rb_v3_scale(rb_v3_add(rb_v3_sub(rb_v3_scale(p[0], 3), p[0]),
+                                            rb_v3_sub(p[2], rb_v3_scale(p[1], 3))),
+                                  u * u * u))),
         0.5f);
     assert_v3(cr_position(&f, 0.5), first.x, first.y, first.z, 1e-4f);
 }
@@ -282,12 +288,9 @@ static void test_fit(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_linear_track),
-        cmocka_unit_test(test_catmull_rom_track),
-        cmocka_unit_test(test_fov_keys),
-        cmocka_unit_test(test_node_camera),
-        cmocka_unit_test(test_node_camera_errors),
-        cmocka_unit_test(test_fit),
+        cmocka_unit_test(test_linear_track),       cmocka_unit_test(test_catmull_rom_track),
+        cmocka_unit_test(test_fov_keys),           cmocka_unit_test(test_node_camera),
+        cmocka_unit_test(test_node_camera_errors), cmocka_unit_test(test_fit),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

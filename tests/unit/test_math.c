@@ -40,8 +40,8 @@ static struct rb_vec3 project(const struct rb_mat4 *m, struct rb_vec3 p)
 static void test_mul(void **state)
 {
     (void)state;
-    struct rb_mat4 a = rb_mat4_trs(rb_v3(1, 2, 3), axis_angle(rb_v3(0, 0, 1), RB_PI / 2),
-                                   rb_v3(1, 1, 1));
+    struct rb_mat4 a =
+        rb_mat4_trs(rb_v3(1, 2, 3), axis_angle(rb_v3(0, 0, 1), RB_PI / 2), rb_v3(1, 1, 1));
     struct rb_mat4 b = rb_mat4_trs(rb_v3(5, 0, 0), rb_quat_identity(), rb_v3(2, 2, 2));
     struct rb_mat4 id = rb_mat4_identity(), ab = rb_mat4_mul(&a, &b);
     struct rb_mat4 ia = rb_mat4_mul(&id, &a);
@@ -76,8 +76,8 @@ static void test_trs(void **state)
 static void test_inverse(void **state)
 {
     (void)state;
-    struct rb_mat4 m = rb_mat4_trs(rb_v3(7, -2, 1), axis_angle(rb_v3(0.2f, 1, -0.4f), 2.0f),
-                                   rb_v3(0.5f, 4, 1.5f));
+    struct rb_mat4 m =
+        rb_mat4_trs(rb_v3(7, -2, 1), axis_angle(rb_v3(0.2f, 1, -0.4f), 2.0f), rb_v3(0.5f, 4, 1.5f));
     bool ok = false;
     struct rb_mat4 inv = rb_mat4_inverse(&m, &ok), id = rb_mat4_identity();
     assert_true(ok);
@@ -95,8 +95,8 @@ static void test_inverse(void **state)
     assert_false(ok);
     assert_mat_near(&zi, &id, 0.0f);
     /* the transpose of a rotation is its inverse */
-    struct rb_mat4 r = rb_mat4_trs(rb_v3(0, 0, 0), axis_angle(rb_v3(1, 2, 3), 0.7f),
-                                   rb_v3(1, 1, 1));
+    struct rb_mat4 r =
+        rb_mat4_trs(rb_v3(0, 0, 0), axis_angle(rb_v3(1, 2, 3), 0.7f), rb_v3(1, 1, 1));
     struct rb_mat4 rt = rb_mat4_transpose(&r), ri = rb_mat4_inverse(&r, NULL);
     assert_mat_near(&rt, &ri, 1e-6f);
 }
@@ -134,7 +134,7 @@ static void test_look_at(void **state)
     struct rb_vec3 eye = rb_v3(3, 4, 5), target = rb_v3(3, 4, -5);
     struct rb_mat4 v = rb_mat4_look_at(eye, target, rb_v3(0, 1, 0));
     assert_v3(rb_mat4_point(&v, eye), 0, 0, 0, 1e-6f);
-    assert_v3(rb_mat4_point(&v, target), 0, 0, -10, 1e-5f); /* looks down -Z */
+    assert_v3(rb_mat4_point(&v, target), 0, 0, -10, 1e-5f);       /* looks down -Z */
     assert_v3(rb_mat4_point(&v, rb_v3(3, 5, 5)), 0, 1, 0, 1e-6f); /* up stays up */
     assert_v3(rb_mat4_point(&v, rb_v3(4, 4, 5)), 1, 0, 0, 1e-6f); /* right is +X */
     /* looking straight down along the up vector still gives an orthonormal view */
@@ -183,12 +183,9 @@ static void test_vectors(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_mul),
-        cmocka_unit_test(test_trs),
-        cmocka_unit_test(test_inverse),
-        cmocka_unit_test(test_slerp),
-        cmocka_unit_test(test_look_at),
-        cmocka_unit_test(test_perspective),
+        cmocka_unit_test(test_mul),     cmocka_unit_test(test_trs),
+        cmocka_unit_test(test_inverse), cmocka_unit_test(test_slerp),
+        cmocka_unit_test(test_look_at), cmocka_unit_test(test_perspective),
         cmocka_unit_test(test_vectors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -141,8 +141,8 @@ static const char *const tiny_gltf =
 
 /* Writes tiny_gltf with the given parts to name and tries to load it. */
 static enum rb_status load_tiny(const char *name, const char *top, const char *node,
-                                const char *prim, const char *count, struct rb_err *err,
-                                char *path, size_t cap)
+                                const char *prim, const char *count, struct rb_err *err, char *path,
+                                size_t cap)
 {
     char json[4096];
     snprintf(json, sizeof(json), tiny_gltf, top, node, prim, count);
@@ -689,15 +689,14 @@ static void test_missing_texture(void **state)
              "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}],"
              "\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"missing.png\"}],");
     struct rb_err err = RB_ERR_INIT;
-    assert_int_not_equal(load_tiny("missing.gltf", top, "", ",\"material\":0", "3", &err, path,
-                                   sizeof(path)),
-                         RB_OK);
+    assert_int_not_equal(
+        load_tiny("missing.gltf", top, "", ",\"material\":0", "3", &err, path, sizeof(path)),
+        RB_OK);
     assert_non_null(strstr(err.msg, "image 'missing.png'"));
 
     /* without a material using it, the image does not matter */
     snprintf(top, sizeof(top), "\"images\":[{\"uri\":\"missing.png\"}],");
-    assert_int_equal(load_tiny("unused.gltf", top, "", "", "3", &err, path, sizeof(path)),
-                     RB_OK);
+    assert_int_equal(load_tiny("unused.gltf", top, "", "", "3", &err, path, sizeof(path)), RB_OK);
 }
 
 static void test_unsupported_extension(void **state)
@@ -725,8 +724,7 @@ static void test_bad_references(void **state)
     char path[512];
     struct rb_err err = RB_ERR_INIT;
     /* sanity: the template loads */
-    assert_int_equal(load_tiny("ok.gltf", "", "", ",\"indices\":1", "3", &err, path,
-                                sizeof(path)),
+    assert_int_equal(load_tiny("ok.gltf", "", "", ",\"indices\":1", "3", &err, path, sizeof(path)),
                      RB_OK);
     static const struct {
         const char *top, *node, *prim, *count, *want;

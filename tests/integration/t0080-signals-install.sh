@@ -1,0 +1,31 @@
+#!/bin/sh
+# SIGINT finishes the frame in flight and stops with status 1, leaving only complete files;
+# `make install` honours PREFIX and DESTDIR.
+. tests/integration/lib.sh
+
+"$RB" render jobs/demo.yaml --size 160x90 --frames 0-47 --out "$T/int" -q 2>"$T/stderr" &
+pid=$!
+i=0
+while [ ! -e "$T/int/frame.0001.timing.json" ] && [ $i -lt 600 ]; do
+    sleep 0.1
+    i=$((i + 1))
+done
+kill -INT $pid
+wait $pid
+status=$?
+expect_exit 1 "SIGINT stops the render with status 1"
+stderr_has "interrupted" "the interruption is reported"
+check "the render stopped early" test ! -e "$T/int/frame.0047.exr"
+check "no temporary file is left" sh -c "! ls '$T/int' | grep -q tmp"
+for exr in "$T"/int/*.exr; do
+    check "$(basename "$exr") is complete" sh -c "oiiotool --info '$exr' >/dev/null"
+done
+
+make -s install BUILD="$BUILD" PREFIX=/opt/rb DESTDIR="$T/stage" >"$T/install.log" 2>&1
+check "make install succeeds" test $? -eq 0
+for f in opt/rb/bin/raybundle opt/rb/share/man/man1/raybundle.1 \
+    opt/rb/share/man/man5/raybundle-job.5 opt/rb/share/raybundle/ocio/config.ocio; do
+    check "installs $f" test -f "$T/stage/$f"
+done
+check "the installed binary runs" sh -c "'$T/stage/opt/rb/bin/raybundle' --version >/dev/null"
+done_testing
