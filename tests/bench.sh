@@ -15,9 +15,10 @@ sed -n 's/.*"device": "\([^"]*\)".*/device: \1/p' "$out/frame.0000.timing.json" 
 sed -n 's/.*"driver": "\([^"]*\)".*/driver: \1/p' "$out/frame.0000.timing.json" | head -n 1
 cat "$out"/frame.*.timing.json | tr '{' '\n' |
     sed -n 's/.*"name": "\([^"]*\)", "gpu_ms": \([0-9.eE+-]*\).*/\1 \2/p' |
-    sort -k1,1 -k2,2g |
-    awk '{ v[$1, ++n[$1]] = $2; if (!($1 in seen)) { seen[$1] = 1; order[++k] = $1 } }
+    awk '{ if (!($1 in n)) order[++k] = $1; v[$1, ++n[$1]] = $2 + 0 }
          END { for (i = 1; i <= k; i++) { p = order[i]; c = n[p];
+               for (a = 2; a <= c; a++) { x = v[p, a]; b = a - 1;
+                   while (b >= 1 && v[p, b] > x) { v[p, b + 1] = v[p, b]; b-- } v[p, b + 1] = x }
                m = (c % 2) ? v[p, (c + 1) / 2] : (v[p, c / 2] + v[p, c / 2 + 1]) / 2;
                printf "pass %-10s median %8.3f ms gpu\n", p, m } }'
 cat "$out"/frame.*.timing.json | sed -n 's/.*"wall_ms": \([0-9.eE+-]*\).*/\1/p' | sort -g |

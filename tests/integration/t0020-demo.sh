@@ -34,6 +34,12 @@ for pass in animate gbuffer shadow direct output; do
         grep -q "\"name\": \"$pass\", \"gpu_ms\": [0-9]" "$json"
 done
 
+if ociocheck --iconfig share/ocio/config.ocio >"$T/ociocheck" 2>&1 && grep -q '^passed' "$T/ociocheck"; then
+    ok "ociocheck passes on the bundled config"
+else
+    not_ok "ociocheck passes on the bundled config" "$(tail -n 20 "$T/ociocheck")"
+fi
+
 # The picture is not empty: the room is lit.
 tap_run "$BUILD/tests/tools/exrstat" "$T/demo/frame.0000.exr" R 0.01
 done_testing

@@ -6,6 +6,10 @@
  *                              within 1% on lit floor pixels, 0 inside the occluder's shadow
  *   analytic spot EXR          checks the spot-light render: lit inside the inner cone, dark
  *                              outside the outer cone
+ *   analytic sun EXR           checks a directional light straight down (3 lux): E albedo/pi,
+ *                              and the occluder's shadow right under it
+ *   analytic sky EXR           checks a view of a constant environment (0.2 0.4 0.8, intensity
+ *                              2): every pixel 0.4 0.8 1.6 with alpha 0
  *   analytic glossy|metal EXR  checks glossy.gltf (dielectric, roughness 0.4) and metal.gltf
  *                              (metallic, roughness 0.5) under the point light against the glTF
  *                              BRDF evaluated here in double precision
@@ -32,6 +36,7 @@ static const double point_intensity = 10.0;
 static const double spot_pos[3] = {-2.0, 2.0, 0.0};
 static const double spot_intensity = 20.0;
 static const double spot_inner_deg = 20.0, spot_outer_deg = 30.0;
+static const double sun_lux = 3.0; /* a directional light straight down */
 
 static int test_no;
 static int failures;
@@ -318,6 +323,63 @@ static int check_brdf(const char *path, double metallic, double roughness)
     return 0;
 }
 
+/* The directional light straight down: E albedo / pi on the floor, black directly under the
+ * occluder. */
+static int check_sun(const char *path)
+{
+    struct image im;
+    if (load(path, &im))
+        return 1;
+    int w = (int)im.img.width_px, h = (int)im.img.height_px;
+    int lit = 0, dark = 0, bad = 0;
+    double want = sun_lux * albedo / PI;
+    for (int y = 1; y < h; y += 3)
+        for (int x = 1; x < w; x += 3) {
+            double p[3];
+            if (!floor_point(x, y, w, h, p) || behind_occluder(p))
+                continue;
+            double got = lum(&im, x, y);
+            if (p[0] > 1.3 && p[0] < 1.7 && fabs(p[2]) < 0.2) {
+                dark++;
+                if (got > 1e-6 && bad++ < 5)
+                    check(0, "pixel %d,%d (floor %.2f,%.2f) under the occluder: %g, want 0", x,
+                          y, p[0], p[2], got);
+            } else if (!(p[0] > 1.1 && p[0] < 1.9 && fabs(p[2]) < 0.4)) {
+                lit++;
+                if (fabs(got - want) > 0.01 * want && bad++ < 5)
+                    check(0, "pixel %d,%d (floor %.2f,%.2f): %g, want E albedo/pi = %g", x, y,
+                          p[0], p[2], got, want);
+            }
+        }
+    check(lit > 100 && bad == 0, "%d floor pixels lit by the directional light match E albedo/pi",
+          lit);
+    check(dark > 3 && bad == 0, "%d pixels under the occluder are in its directional shadow",
+          dark);
+    rb_io_image_release(&im.img);
+    return 0;
+}
+
+/* Every pixel sees the environment (the camera looks at the sky): color times intensity. */
+static int check_sky(const char *path, double r, double g, double b)
+{
+    struct image im;
+    if (load(path, &im))
+        return 1;
+    size_t n = (size_t)im.img.width_px * im.img.height_px, bad = 0;
+    int a = rb_io_image_channel(&im.img, "A");
+    for (size_t i = 0; i < n; i++) {
+        const float *p = &im.img.pixels[i * im.img.channel_count];
+        if (fabs(p[im.r] - r) > 1e-5 || fabs(p[im.g] - g) > 1e-5 || fabs(p[im.b] - b) > 1e-5 ||
+            (a >= 0 && p[a] != 0.0f))
+            bad++;
+    }
+    check(bad == 0, "all %zu background pixels are the environment times its intensity "
+                    "(%g %g %g), alpha 0; %zu are not",
+          n, r, g, b, bad);
+    rb_io_image_release(&im.img);
+    return 0;
+}
+
 static int check_spot(const char *path)
 {
     struct image im;
@@ -358,7 +420,7 @@ static int check_spot(const char *path)
 int main(int argc, char **argv)
 {
     if (argc != 3) {
-        fprintf(stderr, "usage: analytic scene DIR | point|spot|glossy|metal EXR\n");
+        fprintf(stderr, "usage: analytic scene DIR | point|spot|sun|sky|glossy|metal EXR\n");
         return 2;
     }
     if (strcmp(argv[1], "scene") == 0)
@@ -370,6 +432,10 @@ int main(int argc, char **argv)
         rc = check_point(argv[2]);
     else if (strcmp(argv[1], "spot") == 0)
         rc = check_spot(argv[2]);
+    else if (strcmp(argv[1], "sun") == 0)
+        rc = check_sun(argv[2]);
+    else if (strcmp(argv[1], "sky") == 0)
+        rc = check_sky(argv[2], 0.4, 0.8, 1.6);
     else if (strcmp(argv[1], "glossy") == 0)
         rc = check_brdf(argv[2], 0.0, 0.4);
     else if (strcmp(argv[1], "metal") == 0)
