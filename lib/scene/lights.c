@@ -64,11 +64,16 @@ uint32_t rb_scene_world_lights(const struct rb_job *job, const struct rb_scene *
         put(out, cap, &n, &l);
     }
     if (n == 0) {
-        /* Above the top of the bounds by half their height, with an intensity that gives an
-         * irradiance of about 1 at the bounds' center. */
+        /* A key light above, right of and in front of the bounds (the side a fitted camera looks
+         * from, +Z), two bounding radii from the center, with an intensity that gives an
+         * irradiance of about 1 at the center. */
         struct rb_vec3 lo = pose->bounds_min, hi = pose->bounds_max;
         struct rb_vec3 c = rb_v3_scale(rb_v3_add(lo, hi), 0.5f);
-        struct rb_vec3 p = rb_v3(c.x, hi.y + 0.5f * (hi.y - lo.y) + 1e-3f, c.z);
+        float radius = 0.5f * rb_v3_length(rb_v3_sub(hi, lo));
+        if (!(radius > 0.0f))
+            radius = 1.0f;
+        struct rb_vec3 p =
+            rb_v3_add(c, rb_v3_scale(rb_v3_normalize(rb_v3(0.5f, 1.0f, 0.8f)), 2.0f * radius));
         float d = rb_v3_length(rb_v3_sub(p, c)), i = d * d;
         struct rb_world_light l = {
             .type = RB_LIGHT_POINT,

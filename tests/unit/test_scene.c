@@ -589,16 +589,19 @@ static void test_features_lights(void **state)
     memset(pattern, 0x5a, sizeof(pattern));
     assert_memory_equal(&few[1], pattern, sizeof(pattern));
 
-    /* no lights at all: one default point light above the bounds, irradiance ~1 at the center */
+    /* no lights at all: one default point light above, right of and in front of the bounds,
+     * two bounding radii from the center, irradiance ~1 at the center */
     job = (struct rb_job){0};
     log_text[0] = '\0';
     assert_int_equal(rb_scene_world_lights(&job, s, p, out, 5), 1);
     assert_int_equal(out[0].type, RB_LIGHT_POINT);
     struct rb_vec3 c = rb_v3_scale(rb_v3_add(p->bounds_min, p->bounds_max), 0.5f);
-    float h = p->bounds_max.y - p->bounds_min.y;
-    assert_float_equal(out[0].position.x, c.x, 1e-6f);
-    assert_float_equal(out[0].position.y, p->bounds_max.y + 0.5f * h + 1e-3f, 1e-5f);
-    float dist = rb_v3_length(rb_v3_sub(out[0].position, c));
+    float radius = 0.5f * rb_v3_length(rb_v3_sub(p->bounds_max, p->bounds_min));
+    struct rb_vec3 off = rb_v3_sub(out[0].position, c);
+    float dist = rb_v3_length(off);
+    assert_float_equal(dist, 2.0f * radius, 1e-4f * radius);
+    assert_true(off.x > 0.0f && off.y > 0.0f && off.z > 0.0f);
+    assert_true(off.y > off.x && off.y > off.z);
     assert_float_equal(out[0].color[0] / (dist * dist), 1.0f, 1e-4f);
     assert_non_null(strstr(log_text, "default point light"));
     rb_scene_pose_destroy(p);
