@@ -24,6 +24,48 @@ struct rb_integrator {
     struct rb_pass_shadow *shadow;
     struct rb_pass_direct *direct;
     struct rb_pass_output *output;
+
+    /* the frame being recorded */
+    struct rb_frame_slot *cur_slot, *prev_slot;
+    bool need_prev;
+};
+
+static void record_animate(struct rb_integrator *it, VkCommandBuffer cmd)
+{
+    /* The previous frame's vertices are recomputed unless this run just made them; both ways
+     * give the same bits, so the output does not depend on how the range was chunked. */
+    if (it->need_prev)
+        rb_pass_animate_record(it->animate, cmd, &it->frame, it->prev_slot);
+    rb_pass_animate_record(it->animate, cmd, &it->frame, it->cur_slot);
+}
+
+static void record_gbuffer(struct rb_integrator *it, VkCommandBuffer cmd)
+{
+    rb_pass_gbuffer_record(it->gbuffer, cmd, &it->frame, it->cur_slot, it->prev_slot);
+}
+
+static void record_shadow(struct rb_integrator *it, VkCommandBuffer cmd)
+{
+    rb_pass_shadow_record(it->shadow, cmd, &it->frame, it->cur_slot);
+}
+
+static void record_direct(struct rb_integrator *it, VkCommandBuffer cmd)
+{
+    rb_pass_direct_record(it->direct, cmd, &it->frame);
+}
+
+static void record_output(struct rb_integrator *it, VkCommandBuffer cmd)
+{
+    rb_pass_output_record(it->output, cmd, &it->frame);
+}
+
+/* The frame, in order. Each step is one timed pass, followed by a full barrier. */
+static const struct {
+    const char *name;
+    void (*record)(struct rb_integrator *it, VkCommandBuffer cmd);
+} steps[] = {
+    {"animate", record_animate}, {"gbuffer", record_gbuffer}, {"shadow", record_shadow},
+    {"direct", record_direct},   {"output", record_output},
 };
 
 static unsigned slot_of(int frame)
@@ -85,11 +127,9 @@ enum rb_status rb_integrator_render(struct rb_integrator *it, int frame_index,
     struct rb_frame *frame = &it->frame;
     double rate = it->job->rate_fps;
     double t = frame_index / rate, t_prev = (frame_index - 1) / rate;
-    struct rb_frame_slot *cur = &frame->slots[slot_of(frame_index)];
-    struct rb_frame_slot *prev = &frame->slots[slot_of(frame_index - 1)];
-    /* The previous frame's vertices are recomputed unless this run just made them; both ways
-     * give the same bits, so the output does not depend on how the range was chunked. */
-    bool need_prev = !(it->has_last && it->last_frame == frame_index - 1);
+    it->cur_slot = &frame->slots[slot_of(frame_index)];
+    it->prev_slot = &frame->slots[slot_of(frame_index - 1)];
+    it->need_prev = !(it->has_last && it->last_frame == frame_index - 1);
 
     enum rb_status st = rb_moment_evaluate(it->job, it->scene, &it->sel, t_prev, &it->prev, err);
     if (st == RB_OK)
@@ -99,41 +139,21 @@ enum rb_status rb_integrator_render(struct rb_integrator *it, int frame_index,
     if (it->cur.light_count != frame->light_count)
         return rb_errf(err, RB_E_INVALID, "the number of lights changed from %u to %u",
                        frame->light_count, it->cur.light_count);
-    if ((st = rb_gpu_begin(gpu, err)))
-        return st;
-    VkCommandBuffer cmd = gpu->cmd;
-
-    rb_gpu_pass_begin(gpu, cmd, "animate");
-    if (need_prev) {
-        rb_frame_write_slot(frame, it->scene, &it->prev, prev);
-        rb_pass_animate_record(it->animate, cmd, frame, prev);
-    }
-    rb_frame_write_slot(frame, it->scene, &it->cur, cur);
-    rb_pass_animate_record(it->animate, cmd, frame, cur);
-    rb_gpu_barrier(cmd);
-    rb_gpu_pass_end(gpu, cmd);
+    /* Host-visible inputs for both slots and the frame, written before the submit. */
+    if (it->need_prev)
+        rb_frame_write_slot(frame, it->scene, &it->prev, it->prev_slot);
+    rb_frame_write_slot(frame, it->scene, &it->cur, it->cur_slot);
+    rb_frame_write_globals(frame, it->job, frame_index, &it->cur, &it->prev, it->has_env_map);
     it->has_last = false; /* until this frame completes */
 
-    rb_frame_write_globals(frame, it->job, frame_index, &it->cur, &it->prev, it->has_env_map);
-
-    rb_gpu_pass_begin(gpu, cmd, "gbuffer");
-    rb_pass_gbuffer_record(it->gbuffer, cmd, frame, cur, prev);
-    rb_gpu_barrier(cmd);
-    rb_gpu_pass_end(gpu, cmd);
-
-    rb_gpu_pass_begin(gpu, cmd, "shadow");
-    rb_pass_shadow_record(it->shadow, cmd, frame, cur);
-    rb_gpu_barrier(cmd);
-    rb_gpu_pass_end(gpu, cmd);
-
-    rb_gpu_pass_begin(gpu, cmd, "direct");
-    rb_pass_direct_record(it->direct, cmd, frame);
-    rb_gpu_barrier(cmd);
-    rb_gpu_pass_end(gpu, cmd);
-
-    rb_gpu_pass_begin(gpu, cmd, "output");
-    rb_pass_output_record(it->output, cmd, frame);
-    rb_gpu_pass_end(gpu, cmd);
+    if ((st = rb_gpu_begin(gpu, err)))
+        return st;
+    for (size_t i = 0; i < sizeof(steps) / sizeof(steps[0]); i++) {
+        rb_gpu_pass_begin(gpu, gpu->cmd, steps[i].name);
+        steps[i].record(it, gpu->cmd);
+        rb_gpu_barrier(gpu->cmd);
+        rb_gpu_pass_end(gpu, gpu->cmd);
+    }
 
     if ((st = rb_gpu_submit_wait(gpu, err)))
         return st;
