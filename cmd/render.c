@@ -256,9 +256,10 @@ static enum rb_status write_exr(const char *path, const struct rb_job *job,
         uint32_t offset, count;
         const char *const *channels;
     } layers[] = {
-        {NULL, RB_OUT_BEAUTY, 4, rgba},     {"direct", RB_OUT_DIRECT, 3, rgb},
-        {"albedo", RB_OUT_ALBEDO, 3, rgb},  {"normal", RB_OUT_NORMAL, 3, xyz},
-        {"depth", RB_OUT_DEPTH, 1, z},      {"motion", RB_OUT_MOTION, 2, xyz},
+        {NULL, RB_OUT_BEAUTY, 4, rgba},    {"direct", RB_OUT_DIRECT, 3, rgb},
+        {"indirect", RB_OUT_INDIRECT, 3, rgb}, {"albedo", RB_OUT_ALBEDO, 3, rgb},
+        {"normal", RB_OUT_NORMAL, 3, xyz}, {"depth", RB_OUT_DEPTH, 1, z},
+        {"motion", RB_OUT_MOTION, 2, xyz},
     };
     enum { LAYER_COUNT = sizeof(layers) / sizeof(layers[0]) };
     struct rb_io_layer out[LAYER_COUNT];

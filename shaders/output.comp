@@ -1,5 +1,6 @@
 // output: packs the frame's layers into one buffer for a single readback, in the order
-// RB_OUT_* gives (beauty RGBA, direct, albedo, normal, depth, motion).
+// RB_OUT_* gives (beauty RGBA, direct, indirect, albedo, normal, depth, motion). The direct
+// integrator has no indirect light: zero.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "shared.h"
@@ -36,6 +37,9 @@ void main()
     o[base + RB_OUT_DIRECT + 0] = d.r;
     o[base + RB_OUT_DIRECT + 1] = d.g;
     o[base + RB_OUT_DIRECT + 2] = d.b;
+    o[base + RB_OUT_INDIRECT + 0] = 0.0;
+    o[base + RB_OUT_INDIRECT + 1] = 0.0;
+    o[base + RB_OUT_INDIRECT + 2] = 0.0;
     o[base + RB_OUT_ALBEDO + 0] = a.r;
     o[base + RB_OUT_ALBEDO + 1] = a.g;
     o[base + RB_OUT_ALBEDO + 2] = a.b;
@@ -45,5 +49,5 @@ void main()
     o[base + RB_OUT_DEPTH] = hit ? pos.w : 0.0;
     o[base + RB_OUT_MOTION + 0] = m.x;
     o[base + RB_OUT_MOTION + 1] = m.y;
-    o[base + 15] = 0.0;
+    o[base + RB_OUT_FLOATS - 1] = 0.0;
 }

@@ -63,6 +63,7 @@ struct key {
 
 static const char *const integrator_names[] = {NULL, "direct", "bdpt", "hybrid", "reference"};
 static const char *const interp_names[] = {NULL, "linear", "catmull-rom"};
+static const char *const path_names[] = {NULL, "full", "direct", "bdpt"};
 static const char *const light_names[] = {NULL, "point", "spot", "directional"};
 
 #define COUNT(a) (sizeof(a) / sizeof((a)[0]))
@@ -168,9 +169,19 @@ static const struct key keys[] = {
     K("integrator.direct.shadow_size", KT_UINT, JOB(integrator.direct.shadow_size_px), 16, 8192,
      "1024", 0, "shadow map size in pixels (per cube face for point lights)"),
     K("integrator.direct.shadow_bias", KT_FLOAT, JOB(integrator.direct.shadow_bias), 0, NOHI,
-     "0.002", 0, "shadow depth bias in world units, scaled by the slope"),
+     "0.002", 0, "shadow depth bias as a fraction of the distance to the light"),
     K("integrator.direct.pcf_radius", KT_FLOAT, JOB(integrator.direct.pcf_radius_px), 0,
      NOHI, "1.5", 0, "radius of the 16-tap PCF shadow filter in shadow-map pixels"),
+    K("integrator.reference.spp", KT_UINT, JOB(integrator.reference.spp), 1, 1048576, "64", 0,
+     "reference: samples per pixel"),
+    K("integrator.reference.max_bounces", KT_UINT, JOB(integrator.reference.max_bounces), 0, 64,
+     "8", 0, "reference: longest path in bounces after the first hit; 0: direct light only"),
+    K("integrator.reference.rr_depth", KT_UINT, JOB(integrator.reference.rr_depth), 0, 64, "3",
+     0, "reference: bounces before Russian roulette may end a path"),
+    K("integrator.reference.paths", KT_ENUM, JOB(integrator.reference.paths), NOLO, NOHI, "full",
+     0, "reference: which light paths count (full, direct, bdpt)", ENUM(path_names)),
+    K("integrator.reference.time_limit_s", KT_DOUBLE, JOB(integrator.reference.time_limit_s), 0,
+     NOHI, "0", 0, "reference: stop after the pass of samples that crosses this time; 0: none"),
     K("color.config", KT_PATH, JOB(color.config), NOLO, NOHI, NULL, KF_MUST_EXIST,
      "OpenColorIO config for previews; none: $OCIO, then the bundled config"),
     K("color.display", KT_STRING, JOB(color.display), NOLO, NOHI, NULL, 0,
@@ -1138,6 +1149,10 @@ void rb_job_rehash(struct rb_job *job)
     h = h_u32(h, job->integrator.direct.shadow_size_px);
     h = h_f32(h, job->integrator.direct.shadow_bias);
     h = h_f32(h, job->integrator.direct.pcf_radius_px);
+    h = h_u32(h, job->integrator.reference.spp);
+    h = h_u32(h, job->integrator.reference.max_bounces);
+    h = h_u32(h, job->integrator.reference.rr_depth);
+    h = h_u32(h, (uint32_t)job->integrator.reference.paths);
     job->hash = h;
 }
 

@@ -22,6 +22,16 @@ enum rb_interp {
     RB_INTERP_CATMULL_ROM,
 };
 
+/* Which light paths the reference counts (DESIGN.md "reference"). */
+enum rb_path_space {
+    RB_PATHS_DEFAULT = 0, /* resolves to FULL */
+    RB_PATHS_FULL,        /* every path up to max_bounces */
+    RB_PATHS_DIRECT,      /* what the direct integrator computes: punctual lights (shadowed),
+                           * emission, and the environment seen directly */
+    RB_PATHS_BDPT,        /* what bdpt computes: direct light, up to two indirect bounces from
+                           * punctual lights, the environment's direct light */
+};
+
 enum rb_light_type {
     RB_LIGHT_INVALID = 0,
     RB_LIGHT_POINT,
@@ -85,9 +95,16 @@ struct rb_job {
         enum rb_integrator_kind name;
         struct {
             uint32_t shadow_size_px; /* per cube face / shadow map, default 1024 */
-            float shadow_bias;       /* in world units, scaled by the slope; default 0.002 */
+            float shadow_bias;       /* fraction of the distance to the light; default 0.002 */
             float pcf_radius_px;     /* radius of the 16-tap PCF kernel, default 1.5 */
         } direct;
+        struct {
+            uint32_t spp;          /* samples per pixel, default 64 */
+            uint32_t max_bounces;  /* default 8; 0: direct light only */
+            uint32_t rr_depth;     /* Russian roulette after this many bounces, default 3 */
+            enum rb_path_space paths;
+            double time_limit_s;   /* 0: none; else stop at a whole pass when it runs out */
+        } reference;
     } integrator;
 
     struct {

@@ -80,13 +80,15 @@ struct rb_gpu_shadow_view {
                      * radians) or a length (directional, in world units) */
 };
 
-/* The output pass packs these floats per pixel, in this order, for one readback. */
-#define RB_OUT_BEAUTY 0 /* RGBA */
-#define RB_OUT_DIRECT 4 /* RGB */
-#define RB_OUT_ALBEDO 7 /* RGB */
-#define RB_OUT_NORMAL 10 /* XYZ */
-#define RB_OUT_DEPTH 13 /* Z */
-#define RB_OUT_MOTION 14 /* XY */
-#define RB_OUT_FLOATS 16
+/* A frame's result: these floats per pixel, in this order, for one readback (the GPU's output
+ * pass) or straight from the CPU reference. */
+#define RB_OUT_BEAUTY 0    /* RGBA */
+#define RB_OUT_DIRECT 4    /* RGB */
+#define RB_OUT_INDIRECT 7  /* RGB */
+#define RB_OUT_ALBEDO 10   /* RGB */
+#define RB_OUT_NORMAL 13   /* XYZ */
+#define RB_OUT_DEPTH 16    /* Z */
+#define RB_OUT_MOTION 17   /* XY */
+#define RB_OUT_FLOATS 20   /* the last one is padding */
 
 #endif

@@ -14,7 +14,7 @@ check "no temporary files are left" sh -c "! ls '$T/demo' | grep -q tmp"
 
 oiiotool --info -v "$T/demo/frame.0002.exr" >"$T/info" 2>&1
 check "oiiotool reads the EXR" test $? -eq 0
-for ch in R G B A direct.R direct.G direct.B albedo.R normal.X normal.Y normal.Z depth.Z \
+for ch in R G B A direct.R direct.G direct.B indirect.R indirect.G indirect.B albedo.R normal.X normal.Y normal.Z depth.Z \
     motion.X motion.Y; do
     check "channel $ch is present" grep -q "[ ,]$ch[,\" ]\|[ ,]$ch\$" "$T/info"
 done
