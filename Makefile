@@ -102,7 +102,7 @@ $(BUILD)/raybundle: $(CMD_OBJ) $(BUILD)/libraybundle.a
 	@echo "  LINK    $@"
 	$(Q)$(CXX) $(ALL_LDFLAGS) -o $@ $(CMD_OBJ) $(BUILD)/libraybundle.a $(PKG_LIBS)
 
-$(BUILD)/tests/%: tests/unit/%.c $(BUILD)/libraybundle.a $(BUILD)/.flags
+$(BUILD)/tests/%: tests/unit/%.c $(BUILD)/libraybundle.a $(BUILD)/.flags | $(SPV_H)
 	@mkdir -p $(dir $@)
 	@echo "  TEST    $@"
 	$(Q)$(CC) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(ALL_LDFLAGS) -o $@ $< $(BUILD)/libraybundle.a \

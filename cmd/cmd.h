@@ -12,6 +12,8 @@ enum rb_exit {
 };
 
 int cmd_render(int argc, char **argv);
+int cmd_reference(int argc, char **argv);
+int cmd_compare(int argc, char **argv);
 int cmd_info(int argc, char **argv);
 int cmd_help(int argc, char **argv);
 

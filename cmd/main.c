@@ -15,6 +15,8 @@ struct command {
 
 static const struct command commands[] = {
     {"render", cmd_render, "render a job to per-frame EXR images and timing sidecars"},
+    {"reference", cmd_reference, "render a job with the CPU reference path tracer"},
+    {"compare", cmd_compare, "compare two images or frame sequences: RMSE, relMSE, PSNR, ..."},
     {"info", cmd_info, "list Vulkan devices, drivers and the features raybundle uses"},
     {"help", cmd_help, "show this list, or 'help job' for every job-file key"},
 };

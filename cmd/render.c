@@ -16,6 +16,7 @@
 #include "integrators/integrators.h"
 #include "io/io.h"
 #include "job/job.h"
+#include "reference/reference.h"
 #include "scene/scene.h"
 #include "shared.h"
 
@@ -38,28 +39,54 @@ struct options {
     struct rb_job_override overrides[MAX_OVERRIDES];
     size_t override_count;
     const char *frames, *size, *output, *out_dir, *integrator, *device;
+    const char *spp, *time_limit, *threads;
     bool resume, validate, preview, quiet;
     int verbose;
+    const char *command; /* "render" or "reference" */
 };
 
-static void usage(FILE *f)
+/* One rendered frame, whichever backend made it (the GPU integrators or the CPU reference). */
+struct frame {
+    int frame;
+    double time_s;
+    uint32_t width_px, height_px;
+    const float *pixels; /* RB_OUT_FLOATS per pixel */
+    struct rb_io_pass_time passes[RB_GPU_MAX_PASSES]; /* names point into pass_names */
+    char pass_names[RB_GPU_MAX_PASSES][32];
+    uint32_t pass_count;
+    struct rb_mat4 world_to_camera, world_to_ndc;
+    uint32_t spp;       /* the reference: samples reached */
+    uint64_t ray_count; /* the reference: rays traced */
+};
+
+static void usage(FILE *f, const char *command)
 {
+    if (strcmp(command, "reference") == 0)
+        fprintf(f, "usage: raybundle reference JOB [options]\n"
+                   "\n"
+                   "Renders JOB with the CPU reference path tracer (the ground truth the GPU\n"
+                   "integrators are judged against): the same files and layers as render.\n"
+                   "\n");
+    else
+        fprintf(f, "usage: raybundle render JOB [options]\n"
+                   "\n"
+                   "Renders JOB (a YAML job file, or a .gltf/.glb for a quick look) to per-frame\n"
+                   "OpenEXR images with timing sidecars.\n"
+                   "\n");
     fprintf(f,
-            "usage: raybundle render JOB [options]\n"
-            "\n"
-            "Renders JOB (a YAML job file, or a .gltf/.glb for a quick look) to per-frame\n"
-            "OpenEXR images with timing sidecars.\n"
-            "\n"
             "  --frames A-B         render frames A to B (or one frame: A)\n"
             "  --size WxH           override the resolution\n"
             "  --output PATTERN     override the output pattern (#### = frame number)\n"
             "  --out DIR            write into DIR, keeping the pattern's file name\n"
-            "  --integrator NAME    direct (bdpt, hybrid, reference: not yet)\n"
+            "  --integrator NAME    direct or reference (bdpt, hybrid: not yet)\n"
             "  --set KEY=VALUE      override any job key by its dotted path (repeatable)\n"
             "  --resume             skip frames whose files are already complete\n"
             "  --preview            also write NAME.####.png through OpenColorIO\n"
             "  --device NAME|INDEX  pick a Vulkan device (default: lavapipe)\n"
             "  --validate           enable the Khronos validation layer; any message fails\n"
+            "  --spp N              reference: samples per pixel\n"
+            "  --time-limit S       reference: stop at the pass of samples that crosses S seconds\n"
+            "  --threads N          reference: worker threads (default: all cores)\n"
             "  -q, --quiet          no progress output\n"
             "  -v, --verbose        more log output (repeat for debug)\n"
             "  -h, --help           show this help\n"
@@ -70,7 +97,7 @@ static void usage(FILE *f)
 static int parse_options(int argc, char **argv, struct options *o)
 {
     enum { O_FRAMES = 256, O_SIZE, O_OUTPUT, O_OUT, O_INTEGRATOR, O_SET, O_RESUME, O_PREVIEW,
-           O_DEVICE, O_VALIDATE };
+           O_DEVICE, O_VALIDATE, O_SPP, O_TIME_LIMIT, O_THREADS };
     static const struct option opts[] = {
         {"frames", required_argument, NULL, O_FRAMES},
         {"size", required_argument, NULL, O_SIZE},
@@ -82,6 +109,9 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"preview", no_argument, NULL, O_PREVIEW},
         {"device", required_argument, NULL, O_DEVICE},
         {"validate", no_argument, NULL, O_VALIDATE},
+        {"spp", required_argument, NULL, O_SPP},
+        {"time-limit", required_argument, NULL, O_TIME_LIMIT},
+        {"threads", required_argument, NULL, O_THREADS},
         {"quiet", no_argument, NULL, 'q'},
         {"verbose", no_argument, NULL, 'v'},
         {"help", no_argument, NULL, 'h'},
@@ -114,15 +144,18 @@ static int parse_options(int argc, char **argv, struct options *o)
         case O_PREVIEW: o->preview = true; break;
         case O_DEVICE: o->device = optarg; break;
         case O_VALIDATE: o->validate = true; break;
+        case O_SPP: o->spp = optarg; break;
+        case O_TIME_LIMIT: o->time_limit = optarg; break;
+        case O_THREADS: o->threads = optarg; break;
         case 'q': o->quiet = true; break;
         case 'v': o->verbose++; break;
-        case 'h': usage(stdout); return 1;
-        default: usage(stderr); return -1;
+        case 'h': usage(stdout, o->command); return 1;
+        default: usage(stderr, o->command); return -1;
         }
     }
     if (optind != argc - 1) {
-        cmd_error(optind >= argc ? "render needs a JOB" : "render takes one JOB");
-        usage(stderr);
+        cmd_error(optind >= argc ? "%s needs a JOB" : "%s takes one JOB", o->command);
+        usage(stderr, o->command);
         return -1;
     }
     o->job_path = argv[optind];
@@ -179,6 +212,34 @@ static int apply_cli(const struct options *o, struct rb_job *job)
             return -1;
         }
         job->integrator.name = k;
+    }
+    if (strcmp(o->command, "reference") == 0)
+        job->integrator.name = RB_INTEGRATOR_REFERENCE;
+    if (o->spp) {
+        unsigned n;
+        char tail;
+        if (sscanf(o->spp, "%u%c", &n, &tail) != 1 || n < 1 || n > 1048576) {
+            cmd_error("--spp expects 1..1048576, got '%s'", o->spp);
+            return -1;
+        }
+        job->integrator.reference.spp = n;
+    }
+    if (o->time_limit) {
+        double s;
+        char tail;
+        if (sscanf(o->time_limit, "%lf%c", &s, &tail) != 1 || !(s >= 0.0)) {
+            cmd_error("--time-limit expects seconds >= 0, got '%s'", o->time_limit);
+            return -1;
+        }
+        job->integrator.reference.time_limit_s = s;
+    }
+    if (o->threads) {
+        unsigned n;
+        char tail;
+        if (sscanf(o->threads, "%u%c", &n, &tail) != 1 || n < 1 || n > 1024) {
+            cmd_error("--threads expects 1..1024, got '%s'", o->threads);
+            return -1;
+        }
     }
     if (!job->output) {
         cmd_error("out of memory");
@@ -243,8 +304,7 @@ static void progress(bool tty, int done, int total, int frame, double sec_per_fr
 
 /* Splits the packed readback into the EXR's layers and writes it with its metadata. */
 static enum rb_status write_exr(const char *path, const struct rb_job *job,
-                                const struct rb_frame_result *r, float *scratch,
-                                struct rb_err *err)
+                                const struct frame *r, float *scratch, struct rb_err *err)
 {
     size_t n = (size_t)r->width_px * r->height_px;
     static const char *const rgba[] = {"R", "G", "B", "A"};
@@ -285,18 +345,19 @@ static enum rb_status write_exr(const char *path, const struct rb_job *job,
         {.name = "raybundle:time", .type = RB_IO_ATTR_FLOAT, .f = (float)r->time_s},
         {.name = "worldToCamera", .type = RB_IO_ATTR_M44},
         {.name = "worldToNDC", .type = RB_IO_ATTR_M44},
+        {.name = "raybundle:spp", .type = RB_IO_ATTR_INT, .i = (int)r->spp},
     };
+    size_t attr_count = sizeof(attrs) / sizeof(attrs[0]) - (r->spp ? 0 : 1);
     /* Our matrices are column-major for column vectors, which is exactly Imath's row-major
      * layout for row vectors: the floats go over unchanged. */
     memcpy(attrs[5].m, r->world_to_camera.m, sizeof(attrs[5].m));
     memcpy(attrs[6].m, r->world_to_ndc.m, sizeof(attrs[6].m));
-    return rb_io_exr_write(path, r->width_px, r->height_px, out, LAYER_COUNT, attrs,
-                           sizeof(attrs) / sizeof(attrs[0]), err);
+    return rb_io_exr_write(path, r->width_px, r->height_px, out, LAYER_COUNT, attrs, attr_count,
+                           err);
 }
 
 static enum rb_status write_preview(const char *exr_path, const struct rb_job *job,
-                                    const struct rb_frame_result *r, float *scratch,
-                                    struct rb_err *err)
+                                    const struct frame *r, float *scratch, struct rb_err *err)
 {
     char path[4096];
     enum rb_status st = rb_io_sidecar_path(exr_path, ".png", path, sizeof(path), err);
@@ -311,29 +372,132 @@ static enum rb_status write_preview(const char *exr_path, const struct rb_job *j
 }
 
 static enum rb_status write_timing(const char *exr_path, const struct rb_job *job,
-                                   const struct rb_gpu *gpu, const struct rb_frame_result *r,
+                                   const char *device, const char *driver, const struct frame *r,
                                    double wall_ms, struct rb_err *err)
 {
     char path[4096];
     enum rb_status st = rb_io_sidecar_path(exr_path, ".timing.json", path, sizeof(path), err);
     if (st)
         return st;
-    struct rb_io_pass_time passes[RB_GPU_MAX_PASSES];
-    for (uint32_t i = 0; i < r->pass_count; i++)
-        passes[i] = (struct rb_io_pass_time){r->passes[i].name, r->passes[i].gpu_ms};
     struct rb_io_timing t = {
         .frame = r->frame,
         .time_s = r->time_s,
-        .passes = passes,
+        .passes = r->passes,
         .pass_count = r->pass_count,
         .wall_ms = wall_ms,
-        .device = gpu->device_name,
-        .driver = gpu->driver,
+        .device = device,
+        .driver = driver,
         .integrator = rb_integrator_name(job->integrator.name),
         .width_px = r->width_px,
         .height_px = r->height_px,
+        .spp = r->spp,
+        .ray_count = r->ray_count,
     };
     return rb_io_timing_write(path, &t, err);
+}
+
+/* The renderer behind a run: the GPU integrator, or the CPU reference. */
+struct backend {
+    struct rb_gpu *gpu;
+    struct rb_integrator *it;
+    struct rb_reference *ref;
+    char device[256], driver[256];
+    bool tty, quiet;
+};
+
+static bool on_reference_pass(void *user, uint32_t done, uint32_t total)
+{
+    const struct backend *b = user;
+    if (b->tty && !b->quiet)
+        fprintf(stderr, "\r  %u/%u samples ", done, total);
+    return !interrupted;
+}
+
+static enum rb_status backend_render(struct backend *b, int f, struct frame *out,
+                                     struct rb_err *err)
+{
+    memset(out, 0, sizeof(*out));
+    if (b->ref) {
+        struct rb_reference_result r;
+        enum rb_status st = rb_reference_render(b->ref, f, &r, err);
+        if (st)
+            return st;
+        *out = (struct frame){.frame = r.frame,
+                              .time_s = r.time_s,
+                              .width_px = r.width_px,
+                              .height_px = r.height_px,
+                              .pixels = r.pixels,
+                              .pass_count = 1,
+                              .world_to_camera = r.world_to_camera,
+                              .world_to_ndc = r.world_to_ndc,
+                              .spp = r.spp,
+                              .ray_count = r.ray_count};
+        out->passes[0] = (struct rb_io_pass_time){"trace", 0.0, r.render_s * 1e3};
+        return RB_OK;
+    }
+    struct rb_frame_result r;
+    enum rb_status st = rb_integrator_render(b->it, f, &r, err);
+    if (st)
+        return st;
+    *out = (struct frame){.frame = r.frame,
+                          .time_s = r.time_s,
+                          .width_px = r.width_px,
+                          .height_px = r.height_px,
+                          .pixels = r.pixels,
+                          .pass_count = r.pass_count,
+                          .world_to_camera = r.world_to_camera,
+                          .world_to_ndc = r.world_to_ndc};
+    for (uint32_t i = 0; i < r.pass_count; i++) {
+        rb_strlcpy(out->pass_names[i], r.passes[i].name, sizeof(out->pass_names[i]));
+        out->passes[i] = (struct rb_io_pass_time){out->pass_names[i], r.passes[i].gpu_ms, 0};
+    }
+    return RB_OK;
+}
+
+/* Creates the backend the job's integrator needs; GPU errors keep their exit codes. */
+static enum rb_status backend_create(struct backend *b, const struct options *o,
+                                     const struct rb_job *job, const struct rb_scene *scene,
+                                     const float *env, uint32_t env_w, uint32_t env_h,
+                                     struct rb_err *err)
+{
+    if (job->integrator.name == RB_INTEGRATOR_REFERENCE) {
+        unsigned threads = 0;
+        if (o->threads)
+            sscanf(o->threads, "%u", &threads);
+        long cores = sysconf(_SC_NPROCESSORS_ONLN);
+        snprintf(b->device, sizeof(b->device), "cpu (%u threads)",
+                 threads ? threads : (unsigned)(cores > 0 ? cores : 1));
+        snprintf(b->driver, sizeof(b->driver), "raybundle reference %s (Embree 3)", RB_VERSION);
+        return rb_reference_create(&(struct rb_reference_desc){.job = job,
+                                                               .scene = scene,
+                                                               .env_rgba = env,
+                                                               .env_width_px = env_w,
+                                                               .env_height_px = env_h,
+                                                               .thread_count = threads,
+                                                               .on_pass = on_reference_pass,
+                                                               .user = b},
+                                   &b->ref, err);
+    }
+    enum rb_status st = rb_gpu_create(
+        &(struct rb_gpu_desc){.device = o->device, .validate = o->validate}, &b->gpu, err);
+    if (st)
+        return st;
+    rb_strlcpy(b->device, b->gpu->device_name, sizeof(b->device));
+    rb_strlcpy(b->driver, b->gpu->driver, sizeof(b->driver));
+    return rb_integrator_create(&(struct rb_integrator_desc){.job = job,
+                                                             .scene = scene,
+                                                             .gpu = b->gpu,
+                                                             .env_rgba = env,
+                                                             .env_width_px = env_w,
+                                                             .env_height_px = env_h},
+                                &b->it, err);
+}
+
+static void backend_destroy(struct backend *b)
+{
+    rb_reference_destroy(b->ref);
+    rb_integrator_destroy(b->it);
+    rb_gpu_destroy(b->gpu);
 }
 
 /* Loads the environment map as RGBA floats (RGB gets A = 1; one channel is grey). */
@@ -369,36 +533,34 @@ static enum rb_status load_env(const char *path, float **out, uint32_t *w, uint3
     return RB_OK;
 }
 
-int cmd_render(int argc, char **argv)
+static int run(struct options *o, int argc, char **argv)
 {
-    struct options o = {0};
-    int rc = parse_options(argc, argv, &o);
+    int rc = parse_options(argc, argv, o);
     if (rc)
         return rc > 0 ? RB_EXIT_OK : RB_EXIT_USAGE;
-    rb_log_set_level(o.quiet ? RB_LOG_ERROR : (enum rb_log_level)(RB_LOG_WARN + o.verbose));
+    rb_log_set_level(o->quiet ? RB_LOG_ERROR : (enum rb_log_level)(RB_LOG_WARN + o->verbose));
     if (getenv("RB_VALIDATE") && strcmp(getenv("RB_VALIDATE"), "1") == 0)
-        o.validate = true;
+        o->validate = true;
 
     struct rb_err err = RB_ERR_INIT;
     struct rb_job *job = NULL;
     struct rb_scene *scene = NULL;
-    struct rb_gpu *gpu = NULL;
-    struct rb_integrator *it = NULL;
+    struct backend b = {.quiet = o->quiet};
     float *env = NULL, *scratch = NULL;
     uint32_t env_w = 0, env_h = 0;
     enum rb_status st;
     rc = RB_EXIT_OK;
 
-    if ((st = rb_job_load(o.job_path, o.overrides, o.override_count, &job, &err))) {
+    if ((st = rb_job_load(o->job_path, o->overrides, o->override_count, &job, &err))) {
         cmd_error("%s", err.msg);
         rc = exit_for(st, false);
         goto out;
     }
-    if (apply_cli(&o, job)) {
+    if (apply_cli(o, job)) {
         rc = RB_EXIT_USAGE;
         goto out;
     }
-    if (o.preview)
+    if (o->preview)
         job->color.preview = true;
     if ((st = rb_scene_load(job->scene_path, &scene, &err))) {
         cmd_error("%s", err.msg);
@@ -411,20 +573,8 @@ int cmd_render(int argc, char **argv)
         rc = exit_for(st, false);
         goto out;
     }
-    if ((st = rb_gpu_create(&(struct rb_gpu_desc){.device = o.device, .validate = o.validate},
-                            &gpu, &err))) {
-        cmd_error("%s", err.msg);
-        rc = exit_for(st, false);
-        goto out;
-    }
-    st = rb_integrator_create(&(struct rb_integrator_desc){.job = job,
-                                                           .scene = scene,
-                                                           .gpu = gpu,
-                                                           .env_rgba = env,
-                                                           .env_width_px = env_w,
-                                                           .env_height_px = env_h},
-                              &it, &err);
-    if (st) {
+    b.tty = !o->quiet && isatty(STDERR_FILENO);
+    if ((st = backend_create(&b, o, job, scene, env, env_w, env_h, &err))) {
         cmd_error("%s", err.msg);
         rc = st == RB_E_UNSUPPORTED || st == RB_E_INVALID ? RB_EXIT_USAGE : exit_for(st, true);
         goto out;
@@ -438,7 +588,6 @@ int cmd_render(int argc, char **argv)
 
     int first = job->frame_start, last = resolve_end(job, scene);
     int total = last - first + 1, done = 0;
-    bool tty = !o.quiet && isatty(STDERR_FILENO);
     signal(SIGINT, on_sigint);
     double started = now_s();
     int rendered = 0;
@@ -455,35 +604,45 @@ int cmd_render(int argc, char **argv)
             rc = RB_EXIT_USAGE;
             break;
         }
-        if (o.resume && rb_io_image_is_complete(path) && access(timing, R_OK) == 0) {
+        if (o->resume && rb_io_image_is_complete(path) && access(timing, R_OK) == 0) {
             done++;
-            if (!o.quiet)
-                progress(tty, done, total, f, 0.0, true);
+            if (!o->quiet)
+                progress(b.tty, done, total, f, 0.0, true);
             continue;
         }
         double t0 = now_s();
-        struct rb_frame_result r;
-        if ((st = rb_integrator_render(it, f, &r, &err)) ||
-            (st = rb_io_make_parent_dirs(path, &err)) ||
+        struct frame r;
+        if ((st = backend_render(&b, f, &r, &err)) || (st = rb_io_make_parent_dirs(path, &err)) ||
             (st = write_exr(path, job, &r, scratch, &err)) ||
             (job->color.preview && (st = write_preview(path, job, &r, scratch, &err))) ||
-            (st = write_timing(path, job, gpu, &r, (now_s() - t0) * 1e3, &err))) {
+            (st = write_timing(path, job, b.device, b.driver, &r, (now_s() - t0) * 1e3, &err))) {
             cmd_error("frame %d: %s", f, err.msg);
             rc = exit_for(st, true);
             break;
         }
         done++;
         rendered++;
-        if (!o.quiet)
-            progress(tty, done, total, f, (now_s() - started) / rendered, false);
+        if (!o->quiet)
+            progress(b.tty, done, total, f, (now_s() - started) / rendered, false);
     }
     signal(SIGINT, SIG_DFL);
 out:
     free(scratch);
-    rb_integrator_destroy(it);
-    rb_gpu_destroy(gpu);
+    backend_destroy(&b);
     free(env);
     rb_scene_destroy(scene);
     rb_job_destroy(job);
     return rc;
+}
+
+int cmd_render(int argc, char **argv)
+{
+    struct options o = {.command = "render"};
+    return run(&o, argc, argv);
+}
+
+int cmd_reference(int argc, char **argv)
+{
+    struct options o = {.command = "reference"};
+    return run(&o, argc, argv);
 }

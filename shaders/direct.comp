@@ -22,19 +22,26 @@ layout(binding = 9) uniform sampler2DArray shadow_maps;
 layout(binding = 10) uniform sampler2D env_map;
 layout(binding = 11, rgba32f) uniform writeonly image2D o_direct;
 
-// Fraction of 16 taps (a 4x4 grid spanning the PCF radius) that see the light.
-float shadow_visibility(uint layer, vec3 p, float dist, float cos_theta)
+// Fraction of 16 taps (a 4x4 grid spanning the PCF radius) that see the light. The lookup point
+// is pushed off the surface along the geometric normal by the filter's footprint (normal-offset
+// shadows), and the depth test gets a slope-scaled bias: together they keep grazing surfaces
+// from shadowing themselves.
+float shadow_visibility(uint layer, vec3 p, vec3 ng, float cos_theta)
 {
     rb_gpu_shadow_view v = views[layer];
+    bool persp = uint(v.light.w) != RB_KIND_DIRECTIONAL;
+    float radius = g.shadow.y;
+    float d0 = persp ? length(p - v.light.xyz) : dot(p - v.light.xyz, v.axis.xyz);
+    float footprint0 = v.axis.w * (persp ? d0 : 1.0);
+    p += ng * footprint0 * (radius + 1.0) * sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
+    float dist = persp ? length(p - v.light.xyz) : dot(p - v.light.xyz, v.axis.xyz);
     vec4 clip = v.view_proj * vec4(p, 1.0);
     if (clip.w <= 0.0)
         return 1.0;
     vec2 ndc = clip.xy / clip.w;
     float size = g.shadow.z;
     vec2 texel = (ndc * 0.5 + 0.5) * size - 0.5;
-    bool persp = uint(v.light.w) != RB_KIND_DIRECTIONAL;
     float tan_theta = min(sqrt(max(1.0 - cos_theta * cos_theta, 0.0)) / max(cos_theta, 1e-3), 10.0);
-    float radius = g.shadow.y;
     float footprint = v.axis.w * (persp ? dist : 1.0);
     float bias = g.shadow.x * max(dist, 1e-3) + footprint * (radius + 1.0) * tan_theta;
     float step = radius / 1.5;
@@ -99,14 +106,8 @@ void main()
         int first = int(L.color.w);
         if (first >= 0) {
             float cos_g = max(dot(ng, l), 0.0);
-            if (kind == RB_KIND_POINT)
-                vis = shadow_visibility(uint(first) + rb_cube_face(-l), p, dist, cos_g);
-            else if (kind == RB_KIND_SPOT)
-                vis = shadow_visibility(uint(first), p, dist, cos_g);
-            else
-                vis = shadow_visibility(uint(first), p,
-                                        dot(p - views[first].light.xyz, views[first].axis.xyz),
-                                        cos_g);
+            uint layer = uint(first) + (kind == RB_KIND_POINT ? rb_cube_face(-l) : 0u);
+            vis = shadow_visibility(layer, p, ng, cos_g);
         }
         if (vis <= 0.0)
             continue;

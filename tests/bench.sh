@@ -25,3 +25,15 @@ cat "$out"/frame.*.timing.json | sed -n 's/.*"wall_ms": \([0-9.eE+-]*\).*/\1/p' 
     awk '{ v[++n] = $1 } END { printf "frame wall median %.1f ms\n", (n % 2) ? v[(n + 1) / 2] : (v[n / 2] + v[n / 2 + 1]) / 2 }'
 awk -v s="$start" -v e="$end" -v f="$frames" 'BEGIN { printf "frames per second (whole run, incl. start-up and EXR writes): %.2f\n", f / (e - s) }'
 echo "peak resident memory: $(cat "$out/rss") KiB"
+
+# The CPU reference: the demo at 320x180, 64 spp, with 1 and 2 threads.
+for threads in 1 2; do
+    "$BUILD/raybundle" reference jobs/demo.yaml --size 320x180 --frames 0 --spp 64 \
+        --threads "$threads" --out "$out/ref$threads" -q
+    json="$out/ref$threads/frame.0000.timing.json"
+    rays=$(sed -n 's/.*"rays": \([0-9]*\).*/\1/p' "$json")
+    ms=$(sed -n 's/.*"cpu_ms": \([0-9.eE+-]*\).*/\1/p' "$json")
+    awk -v r="$rays" -v ms="$ms" -v t="$threads" 'BEGIN {
+        printf "reference 320x180 64 spp, %d thread(s): %.2f s/frame, %.2f Mrays/s (%d rays)\n",
+               t, ms / 1000, r / (ms / 1000) / 1e6, r }'
+done

@@ -14,7 +14,8 @@ done
 allowed() { # module -> modules it may include
     case $1 in
     core) echo "core" ;;
-    job | gpu | io | reference) echo "core $1" ;;
+    job | gpu | io) echo "core $1" ;;
+    reference) echo "core job scene reference" ;;
     scene) echo "core job scene" ;;
     passes) echo "core gpu scene job passes" ;;
     integrators) echo "core gpu scene job passes integrators" ;;

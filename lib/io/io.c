@@ -758,6 +758,10 @@ enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t
         json_string(&t, tm->passes[i].name);
         text_puts(&t, ", \"gpu_ms\": ");
         json_number(&t, tm->passes[i].gpu_ms);
+        if (tm->passes[i].cpu_ms > 0.0) {
+            text_puts(&t, ", \"cpu_ms\": ");
+            json_number(&t, tm->passes[i].cpu_ms);
+        }
         text_puts(&t, "}");
         gpu_total_ms += tm->passes[i].gpu_ms;
     }
@@ -771,7 +775,12 @@ enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t
     json_string(&t, tm->driver);
     text_puts(&t, ",\n  \"integrator\": ");
     json_string(&t, tm->integrator);
-    text_printf(&t, ",\n  \"width\": %u,\n  \"height\": %u\n}\n", tm->width_px, tm->height_px);
+    text_printf(&t, ",\n  \"width\": %u,\n  \"height\": %u", tm->width_px, tm->height_px);
+    if (tm->spp)
+        text_printf(&t, ",\n  \"spp\": %u", tm->spp);
+    if (tm->ray_count)
+        text_printf(&t, ",\n  \"rays\": %llu", (unsigned long long)tm->ray_count);
+    text_puts(&t, "\n}\n");
 
     enum rb_status st;
     if (t.is_oom)

@@ -96,6 +96,7 @@ const char *rb_io_default_ocio_config(void);
 struct rb_io_pass_time {
     const char *name;
     double gpu_ms;
+    double cpu_ms; /* for passes that run on the CPU (the reference); written when > 0 */
 };
 
 struct rb_io_timing {
@@ -108,6 +109,8 @@ struct rb_io_timing {
     const char *driver;
     const char *integrator;
     uint32_t width_px, height_px;
+    uint32_t spp;       /* samples per pixel reached (the reference); written when > 0 */
+    uint64_t ray_count; /* rays traced (the reference); written when > 0 */
 };
 
 /* Writes NAME.####.timing.json atomically:

@@ -9,7 +9,9 @@ check "--version prints the version" grep -q '^raybundle [0-9]' "$T/stdout"
 
 rb --help
 expect_exit 0 "--help exits 0"
-for c in render info help; do
+commands=$(sed -n "s/^    {\"\([a-z]*\)\", cmd_.*/\1/p" cmd/main.c)
+check "the dispatch table lists at least 5 commands" test "$(echo $commands | wc -w)" -ge 5
+for c in $commands; do
     check "help lists '$c'" grep -q "^  $c " "$T/stdout"
     check "raybundle(1) documents '$c'" grep -q "^\.B $c\( \|\$\)" man/raybundle.1
 done

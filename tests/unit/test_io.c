@@ -644,7 +644,7 @@ static void test_default_config(void **state)
 static void test_timing_json(void **state)
 {
     (void)state;
-    const struct rb_io_pass_time passes[] = {{"gbuffer", 1.25}, {"shadow", 0.5}};
+    const struct rb_io_pass_time passes[] = {{"gbuffer", 1.25, 0.0}, {"shadow", 0.5, 0.0}};
     const struct rb_io_timing t = {
         .frame = 12,
         .time_s = 0.5,
@@ -685,7 +685,7 @@ static void test_timing_escapes(void **state)
 {
     (void)state;
     /* 0.1 + 0.2 needs 17 digits to read back; NaN and infinity are not JSON. */
-    const struct rb_io_pass_time passes[] = {{"a\"b", 0.1}, {"c", 0.2}};
+    const struct rb_io_pass_time passes[] = {{"a\"b", 0.1, 0.0}, {"c", 0.2, 0.0}};
     const struct rb_io_timing t = {
         .frame = -3,
         .time_s = INFINITY,

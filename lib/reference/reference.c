@@ -1,0 +1,694 @@
+/* The CPU reference (DESIGN.md "reference", seed 003 "Ground Truth Comparison"): the frame loop,
+ * the per-frame world (deformed mesh, Embree scene, lights, emitters) and the threads.
+ *
+ * What it computes, and where it deliberately matches the GPU rather than a camera model:
+ * - Every sample of a pixel uses the one camera ray through the pixel centre, the rasterizer's
+ *   sample position (clipped to the camera's near and far planes, skipping back faces of
+ *   single-sided materials and alpha-masked texels, as the G-buffer's discards do). So the
+ *   reference and the GPU integrators differ only in light transport, never in coverage; edges
+ *   are aliased exactly like the G-buffer's, and the AOVs are exact.
+ * - Geometry, materials, textures, punctual lights and the environment are shaders/animate.comp,
+ *   gbuffer.frag, brdf.glsl and lights.glsl transcribed (see deform.c, material.c, brdf.c,
+ *   lights.c); textures are filtered at their own resolution without mipmaps.
+ * - Shadow and bounce rays hit both sides of every triangle (the shadow maps cull nothing);
+ *   emission leaves both sides. The environment map is read bilinearly with u repeating and v
+ *   clamped at the poles.
+ * - Light transport (trace.c): path tracing with next-event estimation; MIS with the power
+ *   heuristic between BSDF sampling and emitter/environment sampling; one-sample MIS over the
+ *   two BRDF lobes; Russian roulette after rr_depth bounces with survival = the throughput's
+ *   largest component clamped to [0.05, 0.95].
+ * - Path spaces: FULL counts every path up to max_bounces bounces past the first hit. DIRECT is
+ *   the direct integrator's: emission at x1, punctual lights at x1 (exact visibility), the
+ *   environment on camera misses. BDPT is BDPT.md's: DIRECT plus the environment's light at x1
+ *   (light and BSDF samples, MIS) plus punctual light after one and two bounces (x2, x3);
+ *   emissive triangles light nothing but themselves.
+ * - Layers: direct = emission at x1 + light reaching x1 after exactly one scattering + the
+ *   environment on camera misses; indirect = the rest; beauty = direct + indirect, alpha 1 on a
+ *   hit and 0 on a miss. AOVs from the first hit: albedo (c_diff), shading normal, view depth,
+ *   motion (previous minus current pixel position of the same surface point).
+ * Determinism: random numbers are a hash of (frame, pixel, sample, dimension) (sample.c); each
+ * pixel's samples are summed in sample order in double by whichever thread owns its row, so the
+ * bits do not depend on the thread count. Samples come in passes of 1, 1, 2, 4, 8, then 16. */
+#include "reference/reference_int.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "shared.h" /* RB_OUT_*: shaders/common, on the include path */
+
+#define MAX_CLIPS 64
+#define MAX_THREADS 256
+#define MAX_PASS_SPP 16
+#define ACCUM 6 /* doubles per pixel: direct RGB, indirect RGB */
+
+struct rb_reference {
+    const struct rb_job *job;
+    const struct rb_scene *scene;
+    uint32_t thread_count;
+    bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
+    void *user;
+
+    uint32_t clips[MAX_CLIPS];
+    struct rb_anim_selection sel;
+    struct rb_scene_pose *pose, *prev_pose;
+
+    /* the world-space mesh, in instance order */
+    uint32_t vertex_count, tri_count;
+    float *pos; /* 4 per vertex: shared with Embree */
+    float *prev_pos, *nrm, *tan, *uv;
+    uint32_t *tris; /* shared with Embree */
+    uint32_t *tri_material;
+    uint8_t *mat_flags;
+    float srgb_lut[256];
+
+    RTCDevice device;
+    RTCScene rtc;
+    RTCGeometry geom;
+    enum RTCError embree_code;
+    char embree_msg[256];
+
+    struct rb_world_light *world_lights;
+    struct rb_ref_light *lights;
+    uint32_t light_cap;
+
+    uint32_t *emitters;
+    float *emitter_cdf, *emit_pdf_area;
+    uint32_t emitter_total; /* triangles with an emissive material */
+
+    struct rb_ref_env env;
+    struct rb_ref_world world;
+
+    uint32_t width_px, height_px;
+    float *pixels;
+    double *accum;
+    struct rb_ref_hit *primary;
+    float *primary_dir; /* 3 per pixel */
+
+    /* the frame being rendered */
+    struct rb_camera cam, prev_cam;
+    struct rb_mat4 world_to_ndc, prev_world_to_ndc;
+    float cam_forward[3]; /* unit view axis, for near/far clipping */
+};
+
+static void embree_error(void *user, enum RTCError code, const char *msg)
+{
+    struct rb_reference *ref = user;
+    if (ref->embree_code == RTC_ERROR_NONE) {
+        ref->embree_code = code;
+        rb_strlcpy(ref->embree_msg, msg ? msg : "unknown error", sizeof(ref->embree_msg));
+    }
+}
+
+static enum rb_status embree_check(struct rb_reference *ref, const char *what, struct rb_err *err)
+{
+    enum RTCError code = rtcGetDeviceError(ref->device);
+    if (code == RTC_ERROR_NONE && ref->embree_code == RTC_ERROR_NONE)
+        return RB_OK;
+    if (ref->embree_code == RTC_ERROR_NONE)
+        ref->embree_code = code;
+    enum rb_status st = ref->embree_code == RTC_ERROR_OUT_OF_MEMORY ? RB_E_NOMEM : RB_E_EXTERNAL;
+    return rb_errf(err, st, "embree: %s: %s (error %d)", what,
+                   ref->embree_msg[0] ? ref->embree_msg : "no message", (int)ref->embree_code);
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+static float srgb_to_linear(float c)
+{
+    return c <= 0.04045f ? c / 12.92f : powf((c + 0.055f) / 1.055f, 2.4f);
+}
+
+/* Counts the mesh, lays out the triangles (global vertex indices, material per triangle) and
+ * flags the materials. */
+static enum rb_status build_mesh(struct rb_reference *ref, struct rb_err *err)
+{
+    const struct rb_scene *scene = ref->scene;
+    const struct rb_scene_pose *pose = ref->pose;
+    if (scene->material_count == 0)
+        return rb_errf(err, RB_E_INVALID, "scene has no materials (not even the default)");
+    uint64_t verts = 0, tris = 0;
+    for (uint32_t i = 0; i < pose->instance_count; i++) {
+        const struct rb_scene_primitive *p = &scene->primitives[pose->instances[i].primitive];
+        verts += p->vertex_count;
+        tris += p->index_count / 3;
+    }
+    if (verts > UINT32_MAX / 4 || tris > UINT32_MAX / 4)
+        return rb_errf(err, RB_E_UNSUPPORTED, "scene too large: %llu vertices, %llu triangles",
+                       (unsigned long long)verts, (unsigned long long)tris);
+    ref->vertex_count = (uint32_t)verts;
+    ref->tri_count = (uint32_t)tris;
+    size_t nv = verts ? verts : 1, nt = tris ? tris : 1;
+    ref->pos = aligned_alloc(16, nv * 4 * sizeof(float));
+    ref->prev_pos = malloc(nv * 3 * sizeof(float));
+    ref->nrm = malloc(nv * 3 * sizeof(float));
+    ref->tan = malloc(nv * 4 * sizeof(float));
+    ref->uv = malloc(nv * 2 * sizeof(float));
+    ref->tris = aligned_alloc(16, ((nt * 3 + 3) & ~(size_t)3) * sizeof(uint32_t));
+    ref->tri_material = malloc(nt * sizeof(uint32_t));
+    ref->emit_pdf_area = calloc(nt, sizeof(float));
+    ref->mat_flags = calloc(scene->material_count, 1);
+    if (!ref->pos || !ref->prev_pos || !ref->nrm || !ref->tan || !ref->uv || !ref->tris ||
+        !ref->tri_material || !ref->emit_pdf_area || !ref->mat_flags)
+        return rb_errf(err, RB_E_NOMEM, "out of memory for %llu vertices, %llu triangles",
+                       (unsigned long long)verts, (unsigned long long)tris);
+
+    for (uint32_t m = 0; m < scene->material_count; m++) {
+        const struct rb_scene_material *mat = &scene->materials[m];
+        uint8_t f = 0;
+        if (mat->alpha_mode == RB_ALPHA_MASK && mat->alpha_cutoff > 0.0f)
+            f |= RB_REF_MAT_MASKED;
+        if (!mat->double_sided)
+            f |= RB_REF_MAT_SINGLE_SIDED;
+        if (mat->emissive[0] > 0.0f || mat->emissive[1] > 0.0f || mat->emissive[2] > 0.0f)
+            f |= RB_REF_MAT_EMISSIVE;
+        ref->mat_flags[m] = f;
+    }
+
+    uint32_t dst = 0, t = 0, emitters = 0;
+    for (uint32_t i = 0; i < pose->instance_count; i++) {
+        const struct rb_scene_primitive *p = &scene->primitives[pose->instances[i].primitive];
+        if (p->material >= scene->material_count)
+            return rb_errf(err, RB_E_INVALID, "primitive %u: material %u does not exist",
+                           pose->instances[i].primitive, p->material);
+        for (uint32_t j = 0; j + 2 < p->index_count; j += 3, t++) {
+            for (int k = 0; k < 3; k++) {
+                uint32_t idx = scene->indices[p->first_index + j + (uint32_t)k];
+                if (idx >= p->vertex_count)
+                    return rb_errf(err, RB_E_INVALID,
+                                   "primitive %u: index %u out of range (%u vertices)",
+                                   pose->instances[i].primitive, idx, p->vertex_count);
+                ref->tris[(size_t)t * 3 + (size_t)k] = dst + idx;
+            }
+            ref->tri_material[t] = p->material;
+            if (ref->mat_flags[p->material] & RB_REF_MAT_EMISSIVE)
+                emitters++;
+        }
+        dst += p->vertex_count;
+    }
+    ref->emitter_total = emitters;
+    ref->emitters = malloc((emitters ? emitters : 1) * sizeof(uint32_t));
+    ref->emitter_cdf = malloc((emitters + 1) * sizeof(float));
+    if (!ref->emitters || !ref->emitter_cdf)
+        return rb_errf(err, RB_E_NOMEM, "out of memory for %u emissive triangles", emitters);
+    for (uint32_t i = 0, e = 0; i < ref->tri_count; i++)
+        if (ref->mat_flags[ref->tri_material[i]] & RB_REF_MAT_EMISSIVE)
+            ref->emitters[e++] = i;
+    return RB_OK;
+}
+
+static enum rb_status build_embree(struct rb_reference *ref, struct rb_err *err)
+{
+    ref->device = rtcNewDevice(NULL);
+    if (!ref->device)
+        return rb_errf(err, RB_E_EXTERNAL, "embree: cannot create a device (error %d)",
+                       (int)rtcGetDeviceError(NULL));
+    rtcSetDeviceErrorFunction(ref->device, embree_error, ref);
+    if (ref->tri_count == 0)
+        return RB_OK;
+    bool needs_filter = false;
+    for (uint32_t m = 0; m < ref->scene->material_count; m++)
+        if (ref->mat_flags[m] & (RB_REF_MAT_MASKED | RB_REF_MAT_SINGLE_SIDED))
+            needs_filter = true;
+    if (needs_filter &&
+        !rtcGetDeviceProperty(ref->device, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED))
+        return rb_errf(err, RB_E_UNSUPPORTED,
+                       "embree was built without filter functions, which alpha masks and "
+                       "single-sided materials need");
+    ref->rtc = rtcNewScene(ref->device);
+    ref->geom = rtcNewGeometry(ref->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    enum rb_status st = embree_check(ref, "creating the scene", err);
+    if (st)
+        return st;
+    rtcSetSceneFlags(ref->rtc, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(ref->rtc, RTC_BUILD_QUALITY_MEDIUM);
+    rtcSetSharedGeometryBuffer(ref->geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, ref->pos, 0,
+                               4 * sizeof(float), ref->vertex_count);
+    rtcSetSharedGeometryBuffer(ref->geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, ref->tris, 0,
+                               3 * sizeof(uint32_t), ref->tri_count);
+    rtcSetGeometryUserData(ref->geom, &ref->world);
+    if (needs_filter) {
+        rtcSetGeometryIntersectFilterFunction(ref->geom, rb_ref_filter);
+        rtcSetGeometryOccludedFilterFunction(ref->geom, rb_ref_filter);
+    }
+    rtcAttachGeometryByID(ref->rtc, ref->geom, 0);
+    return embree_check(ref, "setting up the triangle geometry", err);
+}
+
+enum rb_status rb_reference_create(const struct rb_reference_desc *desc, struct rb_reference **out,
+                                   struct rb_err *err)
+{
+    const struct rb_job *job = desc->job;
+    struct rb_reference *ref = calloc(1, sizeof(*ref));
+    if (!ref)
+        return rb_errf(err, RB_E_NOMEM, "out of memory");
+    enum rb_status st = RB_OK;
+    ref->job = job;
+    ref->scene = desc->scene;
+    ref->on_pass = desc->on_pass;
+    ref->user = desc->user;
+    uint32_t threads = desc->thread_count;
+    if (threads == 0) {
+        long n = sysconf(_SC_NPROCESSORS_ONLN);
+        threads = n > 0 ? (uint32_t)n : 1;
+    }
+    ref->thread_count = threads > MAX_THREADS ? MAX_THREADS : threads;
+    for (int i = 0; i < 256; i++)
+        ref->srgb_lut[i] = srgb_to_linear((float)i / 255.0f);
+
+    uint32_t clip_count = 0;
+    if ((st = rb_scene_select_clips(desc->scene, job, ref->clips, MAX_CLIPS, &clip_count, err)))
+        goto fail;
+    ref->sel = (struct rb_anim_selection){
+        .clips = ref->clips,
+        .clip_count = clip_count,
+        .offset_s = job->animation.offset_s,
+        .speed = job->animation.speed,
+        .loop = job->animation.loop,
+    };
+    if ((st = rb_scene_pose_create(desc->scene, &ref->pose, err)) ||
+        (st = rb_scene_pose_create(desc->scene, &ref->prev_pose, err)))
+        goto fail;
+    if ((st = build_mesh(ref, err)) || (st = build_embree(ref, err)))
+        goto fail;
+
+    ref->env = (struct rb_ref_env){
+        .color = {job->environment.color[0] * job->environment.intensity,
+                  job->environment.color[1] * job->environment.intensity,
+                  job->environment.color[2] * job->environment.intensity},
+        .intensity = job->environment.intensity,
+        .rotation_rad = job->environment.rotation_deg * RB_PI / 180.0f,
+        .rgba = desc->env_rgba,
+        .width_px = desc->env_width_px,
+        .height_px = desc->env_height_px,
+    };
+    if ((st = rb_ref_env_init(&ref->env, err)))
+        goto fail;
+
+    ref->width_px = job->width_px;
+    ref->height_px = job->height_px;
+    if (ref->width_px == 0 || ref->height_px == 0) {
+        st = rb_errf(err, RB_E_INVALID, "resolution %ux%u", ref->width_px, ref->height_px);
+        goto fail;
+    }
+    size_t px = (size_t)ref->width_px * ref->height_px;
+    ref->pixels = calloc(px * RB_OUT_FLOATS, sizeof(float));
+    ref->accum = calloc(px * ACCUM, sizeof(double));
+    ref->primary = calloc(px, sizeof(*ref->primary));
+    ref->primary_dir = calloc(px * 3, sizeof(float));
+    if (!ref->pixels || !ref->accum || !ref->primary || !ref->primary_dir) {
+        st = rb_errf(err, RB_E_NOMEM, "out of memory for a %ux%u image", ref->width_px,
+                     ref->height_px);
+        goto fail;
+    }
+    *out = ref;
+    return RB_OK;
+fail:
+    rb_reference_destroy(ref);
+    return st;
+}
+
+void rb_reference_destroy(struct rb_reference *ref)
+{
+    if (!ref)
+        return;
+    if (ref->geom)
+        rtcReleaseGeometry(ref->geom);
+    if (ref->rtc)
+        rtcReleaseScene(ref->rtc);
+    if (ref->device)
+        rtcReleaseDevice(ref->device);
+    rb_ref_env_release(&ref->env);
+    free(ref->primary_dir);
+    free(ref->primary);
+    free(ref->accum);
+    free(ref->pixels);
+    free(ref->lights);
+    free(ref->world_lights);
+    free(ref->emitter_cdf);
+    free(ref->emitters);
+    free(ref->mat_flags);
+    free(ref->emit_pdf_area);
+    free(ref->tri_material);
+    free(ref->tris);
+    free(ref->uv);
+    free(ref->tan);
+    free(ref->nrm);
+    free(ref->prev_pos);
+    free(ref->pos);
+    rb_scene_pose_destroy(ref->prev_pose);
+    rb_scene_pose_destroy(ref->pose);
+    free(ref);
+}
+
+/* ---- the frame's world ---------------------------------------------------------------------- */
+
+static enum rb_status update_lights(struct rb_reference *ref, struct rb_err *err)
+{
+    uint32_t n = rb_scene_world_lights(ref->job, ref->scene, ref->pose, NULL, 0);
+    if (n > ref->light_cap) {
+        struct rb_world_light *wl = realloc(ref->world_lights, n * sizeof(*wl));
+        if (wl)
+            ref->world_lights = wl;
+        struct rb_ref_light *l = realloc(ref->lights, n * sizeof(*l));
+        if (l)
+            ref->lights = l;
+        if (!wl || !l)
+            return rb_errf(err, RB_E_NOMEM, "out of memory for %u lights", n);
+        ref->light_cap = n;
+    }
+    n = rb_scene_world_lights(ref->job, ref->scene, ref->pose, ref->world_lights, n);
+    for (uint32_t i = 0; i < n; i++) {
+        const struct rb_world_light *w = &ref->world_lights[i];
+        ref->lights[i] = (struct rb_ref_light){
+            .type = w->type,
+            .position = {w->position.x, w->position.y, w->position.z},
+            .direction = {w->direction.x, w->direction.y, w->direction.z},
+            .color = {w->color[0], w->color[1], w->color[2]},
+            .range = w->range,
+            .cos_inner = cosf(w->inner_cone_rad),
+            .cos_outer = cosf(w->outer_cone_rad),
+        };
+    }
+    ref->world.light_count = n;
+    return RB_OK;
+}
+
+/* Emitter selection by power: area x luminance of the emissive factor, for this frame's
+ * triangle areas. A triangle's pdf per unit area is its probability in the CDF as stored (so the
+ * pdf is exactly that of the sampling) over its area. */
+static void update_emitters(struct rb_reference *ref)
+{
+    const struct rb_scene *scene = ref->scene;
+    double total = 0.0;
+    ref->emitter_cdf[0] = 0.0f;
+    for (uint32_t e = 0; e < ref->emitter_total; e++) {
+        uint32_t t = ref->emitters[e];
+        const uint32_t *tri = &ref->tris[(size_t)t * 3];
+        const float *p0 = &ref->pos[tri[0] * 4], *p1 = &ref->pos[tri[1] * 4];
+        const float *p2 = &ref->pos[tri[2] * 4];
+        float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+        float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+        float c[3];
+        rb_ref_cross(e1, e2, c);
+        float area = 0.5f * sqrtf(rb_ref_dot(c, c));
+        const float *em = scene->materials[ref->tri_material[t]].emissive;
+        float lum_in[3] = {fmaxf(em[0], 0.0f), fmaxf(em[1], 0.0f), fmaxf(em[2], 0.0f)};
+        double power = area > 0.0f && area < INFINITY ? area * rb_ref_luminance(lum_in) : 0.0;
+        ref->emit_pdf_area[t] = area; /* until the CDF is known */
+        total += power;
+        ref->emitter_cdf[e + 1] = (float)total;
+    }
+    for (uint32_t e = 0; e < ref->emitter_total; e++)
+        ref->emitter_cdf[e + 1] = total > 0.0 ? (float)(ref->emitter_cdf[e + 1] / total) : 0.0f;
+    if (ref->emitter_total && total > 0.0)
+        ref->emitter_cdf[ref->emitter_total] = 1.0f;
+    for (uint32_t e = 0; e < ref->emitter_total; e++) {
+        uint32_t t = ref->emitters[e];
+        float p = ref->emitter_cdf[e + 1] - ref->emitter_cdf[e], area = ref->emit_pdf_area[t];
+        ref->emit_pdf_area[t] = p > 0.0f && area > 0.0f ? p / area : 0.0f;
+    }
+    ref->world.emitter_count = total > 0.0 ? ref->emitter_total : 0;
+}
+
+static enum rb_status prepare_frame(struct rb_reference *ref, int frame, double t, double t_prev,
+                                    struct rb_err *err)
+{
+    const struct rb_job *job = ref->job;
+    rb_scene_evaluate(ref->scene, &ref->sel, t_prev, ref->prev_pose);
+    enum rb_status st =
+        rb_camera_evaluate(job, ref->scene, ref->prev_pose, t_prev, &ref->prev_cam, err);
+    if (st)
+        return st;
+    rb_ref_deform(ref->scene, ref->prev_pose, ref->prev_pos, 3, NULL, NULL, NULL);
+    rb_scene_evaluate(ref->scene, &ref->sel, t, ref->pose);
+    if ((st = rb_camera_evaluate(job, ref->scene, ref->pose, t, &ref->cam, err)))
+        return st;
+    rb_ref_deform(ref->scene, ref->pose, ref->pos, 4, ref->nrm, ref->tan, ref->uv);
+    if ((st = update_lights(ref, err)))
+        return st;
+    update_emitters(ref);
+
+    float aspect = (float)ref->width_px / (float)ref->height_px;
+    struct rb_mat4 proj =
+        rb_mat4_perspective(ref->cam.fov_y_rad, aspect, ref->cam.z_near, ref->cam.z_far);
+    ref->world_to_ndc = rb_mat4_mul(&proj, &ref->cam.world_to_camera);
+    struct rb_mat4 pproj = rb_mat4_perspective(ref->prev_cam.fov_y_rad, aspect,
+                                               ref->prev_cam.z_near, ref->prev_cam.z_far);
+    ref->prev_world_to_ndc = rb_mat4_mul(&pproj, &ref->prev_cam.world_to_camera);
+    /* the view axis (-Z of the camera) in world space: row 2 of the view's rotation, negated */
+    const struct rb_mat4 *v = &ref->cam.world_to_camera;
+    float fwd[3] = {-v->m[0][2], -v->m[1][2], -v->m[2][2]};
+    float len = sqrtf(rb_ref_dot(fwd, fwd));
+    for (int i = 0; i < 3; i++)
+        ref->cam_forward[i] = len > 0.0f ? fwd[i] / len : 0.0f;
+
+    if (ref->rtc) {
+        rtcUpdateGeometryBuffer(ref->geom, RTC_BUFFER_TYPE_VERTEX, 0);
+        rtcCommitGeometry(ref->geom);
+        rtcCommitScene(ref->rtc);
+        if ((st = embree_check(ref, "building the BVH", err)))
+            return st;
+    }
+
+    struct rb_ref_world *w = &ref->world;
+    w->scene = ref->scene;
+    w->mat_flags = ref->mat_flags;
+    w->srgb_lut = ref->srgb_lut;
+    w->vertex_count = ref->vertex_count;
+    w->tri_count = ref->tri_count;
+    w->pos = ref->pos;
+    w->prev_pos = ref->prev_pos;
+    w->nrm = ref->nrm;
+    w->tan = ref->tan;
+    w->uv = ref->uv;
+    w->tris = ref->tris;
+    w->tri_material = ref->tri_material;
+    w->rtc = ref->rtc;
+    w->lights = ref->lights;
+    w->emitters = ref->emitters;
+    w->emitter_cdf = ref->emitter_cdf;
+    w->emit_pdf_area = ref->emit_pdf_area;
+    w->env = &ref->env;
+    w->paths = job->integrator.reference.paths == RB_PATHS_DEFAULT
+                   ? RB_PATHS_FULL
+                   : job->integrator.reference.paths;
+    w->max_bounces = job->integrator.reference.max_bounces;
+    w->rr_depth = job->integrator.reference.rr_depth;
+    w->frame = (uint32_t)frame;
+    return RB_OK;
+}
+
+/* ---- pixels --------------------------------------------------------------------------------- */
+
+static void project_px(const struct rb_mat4 *m, const float p[3], float w, float h, float out[2])
+{
+    struct rb_vec4 c = rb_mat4_vec4(m, (struct rb_vec4){p[0], p[1], p[2], 1.0f});
+    out[0] = (c.x / c.w * 0.5f + 0.5f) * w;
+    out[1] = (c.y / c.w * 0.5f + 0.5f) * h;
+}
+
+/* The camera ray of pixel (x, y), its first hit, and the AOVs (or the environment on a miss). */
+static void primary_pixel(struct rb_reference *ref, const struct rb_mat4 *inv_vp, uint32_t x,
+                          uint32_t y, uint64_t *rays)
+{
+    const struct rb_ref_world *w = &ref->world;
+    size_t i = (size_t)y * ref->width_px + x;
+    float *o = ref->pixels + i * RB_OUT_FLOATS;
+    float fw = (float)ref->width_px, fh = (float)ref->height_px;
+    float ndc_x = ((float)x + 0.5f) / fw * 2.0f - 1.0f;
+    float ndc_y = ((float)y + 0.5f) / fh * 2.0f - 1.0f;
+    struct rb_vec4 far = rb_mat4_vec4(inv_vp, (struct rb_vec4){ndc_x, ndc_y, 1.0f, 1.0f});
+    float dir[3] = {far.x / far.w - ref->cam.position.x, far.y / far.w - ref->cam.position.y,
+                    far.z / far.w - ref->cam.position.z};
+    float len = sqrtf(rb_ref_dot(dir, dir));
+    for (int k = 0; k < 3; k++)
+        dir[k] = len > 0.0f ? dir[k] / len : 0.0f;
+    memcpy(ref->primary_dir + i * 3, dir, sizeof(dir));
+    memset(o, 0, RB_OUT_FLOATS * sizeof(float));
+
+    /* The rasterizer clips at the near and far planes, which are view depths. */
+    float cos_fwd = rb_ref_dot(dir, ref->cam_forward);
+    struct rb_ref_hit *hit = &ref->primary[i];
+    hit->prim = RB_REF_NONE;
+    if (cos_fwd > 0.0f) {
+        float org[3] = {ref->cam.position.x, ref->cam.position.y, ref->cam.position.z};
+        rb_ref_intersect(w, true, org, dir, ref->cam.z_near / cos_fwd, ref->cam.z_far / cos_fwd,
+                         hit);
+        (*rays)++;
+    }
+    if (hit->prim == RB_REF_NONE) {
+        float env[3];
+        rb_ref_env_eval(&ref->env, dir, env);
+        memcpy(o + RB_OUT_BEAUTY, env, sizeof(env));
+        memcpy(o + RB_OUT_DIRECT, env, sizeof(env));
+        return;
+    }
+    struct rb_ref_surface s;
+    rb_ref_surface_eval(w, hit->prim, hit->u, hit->v, dir, &s);
+    memcpy(o + RB_OUT_ALBEDO, s.c_diff, sizeof(s.c_diff));
+    memcpy(o + RB_OUT_NORMAL, s.n, sizeof(s.n));
+    struct rb_vec3 vp = rb_mat4_point(&ref->cam.world_to_camera, rb_v3(s.p[0], s.p[1], s.p[2]));
+    o[RB_OUT_DEPTH] = -vp.z;
+    const uint32_t *tri = &w->tris[(size_t)hit->prim * 3];
+    float b0 = 1.0f - hit->u - hit->v, prev[3];
+    for (int c = 0; c < 3; c++)
+        prev[c] = b0 * w->prev_pos[tri[0] * 3 + c] + hit->u * w->prev_pos[tri[1] * 3 + c] +
+                  hit->v * w->prev_pos[tri[2] * 3 + c];
+    float cur_px[2], prev_px[2];
+    project_px(&ref->world_to_ndc, s.p, fw, fh, cur_px);
+    project_px(&ref->prev_world_to_ndc, prev, fw, fh, prev_px);
+    o[RB_OUT_MOTION + 0] = prev_px[0] - cur_px[0];
+    o[RB_OUT_MOTION + 1] = prev_px[1] - cur_px[1];
+}
+
+static void trace_pixel(struct rb_reference *ref, size_t i, uint32_t s0, uint32_t s1,
+                        uint64_t *rays)
+{
+    const struct rb_ref_hit *hit = &ref->primary[i];
+    if (hit->prim == RB_REF_NONE)
+        return;
+    double *acc = ref->accum + i * ACCUM;
+    if (ref->world.paths == RB_PATHS_DIRECT && s0 > 0) {
+        /* No random numbers in this path space: every sample is the first one. The sums stay
+         * exact (s0 copies of a float, divided by s0, times s1). */
+        for (int c = 0; c < ACCUM; c++)
+            acc[c] = acc[c] / s0 * s1;
+        return;
+    }
+    for (uint32_t s = s0; s < s1; s++) {
+        float direct[3] = {0, 0, 0}, indirect[3] = {0, 0, 0};
+        rb_ref_trace_sample(&ref->world, hit, ref->primary_dir + i * 3, (uint32_t)i, s, direct,
+                            indirect, rays);
+        for (int c = 0; c < 3; c++) {
+            acc[c] += direct[c];
+            acc[3 + c] += indirect[c];
+        }
+    }
+}
+
+/* ---- threads -------------------------------------------------------------------------------- */
+
+/* One stage over all rows: the camera rays (is_primary) or samples [s0, s1) of every pixel. */
+struct stage {
+    struct rb_reference *ref;
+    bool is_primary;
+    uint32_t s0, s1;
+    struct rb_mat4 inv_vp;
+    atomic_uint next_row;
+    atomic_uint_fast64_t rays;
+};
+
+static void *stage_worker(void *arg)
+{
+    struct stage *st = arg;
+    struct rb_reference *ref = st->ref;
+    uint64_t rays = 0;
+    for (;;) {
+        unsigned y = atomic_fetch_add(&st->next_row, 1u);
+        if (y >= ref->height_px)
+            break;
+        for (uint32_t x = 0; x < ref->width_px; x++) {
+            if (st->is_primary)
+                primary_pixel(ref, &st->inv_vp, x, y, &rays);
+            else
+                trace_pixel(ref, (size_t)y * ref->width_px + x, st->s0, st->s1, &rays);
+        }
+    }
+    atomic_fetch_add(&st->rays, rays);
+    return NULL;
+}
+
+/* Runs the stage on the calling thread and up to thread_count - 1 more; a thread that cannot be
+ * started only means fewer workers (the rows go to the others, and the bits do not change). */
+static uint64_t run_stage(struct rb_reference *ref, struct stage *st)
+{
+    atomic_init(&st->next_row, 0u);
+    atomic_init(&st->rays, 0u);
+    pthread_t threads[MAX_THREADS];
+    uint32_t want = ref->thread_count < ref->height_px ? ref->thread_count : ref->height_px;
+    uint32_t started = 0;
+    for (uint32_t i = 1; i < want; i++) {
+        if (pthread_create(&threads[started], NULL, stage_worker, st) != 0)
+            break;
+        started++;
+    }
+    stage_worker(st);
+    for (uint32_t i = 0; i < started; i++)
+        pthread_join(threads[i], NULL);
+    return atomic_load(&st->rays);
+}
+
+enum rb_status rb_reference_render(struct rb_reference *ref, int frame,
+                                   struct rb_reference_result *out, struct rb_err *err)
+{
+    double start = now_s();
+    double rate = ref->job->rate_fps > 0.0 ? ref->job->rate_fps : 1.0;
+    double t = frame / rate, t_prev = (frame - 1) / rate;
+    enum rb_status st = prepare_frame(ref, frame, t, t_prev, err);
+    if (st) {
+        rb_err_prefix(err, "reference frame %d", frame);
+        return st;
+    }
+    double trace_start = now_s();
+    size_t px = (size_t)ref->width_px * ref->height_px;
+    memset(ref->accum, 0, px * ACCUM * sizeof(double));
+
+    struct stage stage = {.ref = ref, .is_primary = true};
+    stage.inv_vp = rb_mat4_inverse(&ref->world_to_ndc, NULL);
+    uint64_t rays = run_stage(ref, &stage);
+
+    uint32_t spp_total =
+        ref->job->integrator.reference.spp ? ref->job->integrator.reference.spp : 64;
+    double limit = ref->job->integrator.reference.time_limit_s;
+    uint32_t done = 0, pass = 1;
+    while (done < spp_total) {
+        uint32_t n = pass < spp_total - done ? pass : spp_total - done;
+        stage = (struct stage){.ref = ref, .is_primary = false, .s0 = done, .s1 = done + n};
+        rays += run_stage(ref, &stage);
+        done += n;
+        if (done > 1 && pass < MAX_PASS_SPP)
+            pass *= 2;
+        bool go_on = ref->on_pass ? ref->on_pass(ref->user, done, spp_total) : true;
+        if (!go_on || (limit > 0.0 && now_s() - start >= limit))
+            break;
+    }
+
+    double inv = 1.0 / (double)done;
+    for (size_t i = 0; i < px; i++) {
+        if (ref->primary[i].prim == RB_REF_NONE)
+            continue; /* the environment, written by the camera ray */
+        const double *acc = ref->accum + i * ACCUM;
+        float *o = ref->pixels + i * RB_OUT_FLOATS;
+        for (int c = 0; c < 3; c++) {
+            double d = acc[c] * inv, ind = acc[3 + c] * inv;
+            o[RB_OUT_BEAUTY + c] = (float)(d + ind);
+            o[RB_OUT_DIRECT + c] = (float)d;
+            o[RB_OUT_INDIRECT + c] = (float)ind;
+        }
+        o[RB_OUT_BEAUTY + 3] = 1.0f;
+    }
+
+    memset(out, 0, sizeof(*out));
+    out->frame = frame;
+    out->time_s = t;
+    out->width_px = ref->width_px;
+    out->height_px = ref->height_px;
+    out->pixels = ref->pixels;
+    out->spp = done;
+    out->ray_count = rays;
+    out->render_s = now_s() - trace_start;
+    out->world_to_camera = ref->cam.world_to_camera;
+    out->world_to_ndc = ref->world_to_ndc;
+    return RB_OK;
+}

@@ -1,0 +1,64 @@
+/* The CPU reference: a unidirectional path tracer over the same evaluated scene, materials,
+ * textures, lights and environment as the GPU integrators (Embree for intersection), used as
+ * the ground truth every GPU integrator is judged against (DESIGN.md "reference", seed 003's
+ * "Ground Truth Comparison"). Deterministic: per-pixel, per-sample random numbers keyed by
+ * (frame, pixel, sample), so the result does not depend on the thread count. */
+#ifndef RB_REFERENCE_REFERENCE_H
+#define RB_REFERENCE_REFERENCE_H
+
+#include "core/core.h"
+#include "job/job.h"
+#include "scene/scene.h"
+
+struct rb_reference;
+
+struct rb_reference_desc {
+    const struct rb_job *job;     /* borrowed: settings in job->integrator.reference */
+    const struct rb_scene *scene; /* borrowed */
+    const float *env_rgba;        /* equirectangular RGBA, or NULL: job->environment.color */
+    uint32_t env_width_px, env_height_px;
+    uint32_t thread_count;        /* 0: all cores */
+    /* Called after each whole pass of samples with the samples done so far (for progress);
+     * may be NULL. Returning false stops after that pass (as a time limit does). */
+    bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
+    void *user;
+};
+
+/* What one frame produced: RB_OUT_FLOATS floats per pixel in the RB_OUT_* order of
+ * shaders/common/shared.h (beauty, direct, indirect, albedo, normal, depth, motion), rows top to
+ * bottom; valid until the next render or destroy. */
+struct rb_reference_result {
+    int frame;
+    double time_s;
+    uint32_t width_px, height_px;
+    const float *pixels;
+    uint32_t spp;        /* samples per pixel reached (less than asked when a limit stopped it) */
+    uint64_t ray_count;  /* rays traced (camera, bounce and shadow rays) */
+    double render_s;     /* wall time of the tracing */
+    struct rb_mat4 world_to_camera, world_to_ndc; /* as the GPU integrators write them */
+};
+
+/* Builds the reference for the job and scene (Embree device, light tables). Fails with
+ * RB_E_EXTERNAL for an Embree error, RB_E_NOMEM. */
+enum rb_status rb_reference_create(const struct rb_reference_desc *desc,
+                                   struct rb_reference **out, struct rb_err *err);
+
+/* Renders one frame (time = frame / rate): evaluates the animation, deforms the geometry on the
+ * CPU (skins, morphs, node transforms: the same math as the animate pass), rebuilds the BVH,
+ * traces. Thread-safe only against itself: one render at a time per object. */
+enum rb_status rb_reference_render(struct rb_reference *ref, int frame,
+                                   struct rb_reference_result *out, struct rb_err *err);
+
+void rb_reference_destroy(struct rb_reference *ref);
+
+/* ---- shading model, shared with the tests ------------------------------------------------ */
+
+/* The glTF BRDF exactly as shaders/common/brdf.glsl evaluates it (f, without the cosine), for
+ * the BRDF parity test: n, v, l unit vectors; c_diff, f0 RGB; f90 scalar. */
+void rb_reference_brdf(const float n[3], const float v[3], const float l[3], const float c_diff[3],
+                       const float f0[3], float f90, float roughness, float out[3]);
+
+/* The counter-based random number in [0, 1) for (frame, pixel, sample, dimension). */
+float rb_reference_random(uint32_t frame, uint32_t pixel, uint32_t sample, uint32_t dim);
+
+#endif

@@ -1,0 +1,276 @@
+/* The reference's path integrator: one sample of one pixel. Unidirectional path tracing from the
+ * camera's first hit, next-event estimation at every vertex (each punctual light with an exact
+ * shadow ray; one emissive triangle by power; one environment direction) and BSDF sampling,
+ * the two combined with the power heuristic (beta = 2) for the emitters and the environment.
+ * Punctual lights are deltas: light sampling only. Which vertices may do what follows the path
+ * space (enum rb_path_space); see the header comment of reference.c. */
+#include "reference/reference_int.h"
+
+#include <math.h>
+
+/* Random dimensions: a block per path vertex. */
+enum {
+    DIM_LOBE,
+    DIM_DIR0,
+    DIM_DIR1,
+    DIM_RR,
+    DIM_EMIT_PICK,
+    DIM_EMIT_U,
+    DIM_EMIT_V,
+    DIM_ENV_U,
+    DIM_ENV_V,
+    DIMS_PER_VERTEX = 16
+};
+
+/* Shadow rays stop this fraction short of the light's point. */
+#define SHADOW_SHORTEN 1e-4f
+
+static float power_heuristic(float a, float b)
+{
+    if (!(a < INFINITY))
+        return 1.0f;
+    if (!(b < INFINITY))
+        return 0.0f;
+    float a2 = a * a, b2 = b * b;
+    return a2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
+
+static bool is_black(const float c[3])
+{
+    return !(c[0] > 0.0f || c[1] > 0.0f || c[2] > 0.0f);
+}
+
+static void add_scaled(float acc[3], const float beta[3], const float a[3], const float b[3],
+                       float s)
+{
+    for (int i = 0; i < 3; i++)
+        acc[i] += beta[i] * a[i] * b[i] * s;
+}
+
+/* Every punctual light, as shaders/direct.comp lights a G-buffer pixel, with a shadow ray in
+ * place of the shadow map. */
+static void nee_punctual(const struct rb_ref_world *w, const struct rb_ref_surface *s,
+                         const struct rb_ref_bsdf *b, const float beta[3], float acc[3],
+                         uint64_t *rays)
+{
+    for (uint32_t i = 0; i < w->light_count; i++) {
+        const struct rb_ref_light *L = &w->lights[i];
+        float l[3], dist, atten;
+        if (L->type == RB_LIGHT_DIRECTIONAL) {
+            l[0] = -L->direction[0];
+            l[1] = -L->direction[1];
+            l[2] = -L->direction[2];
+            dist = INFINITY;
+            atten = 1.0f;
+        } else {
+            float d[3] = {L->position[0] - s->p[0], L->position[1] - s->p[1],
+                          L->position[2] - s->p[2]};
+            dist = sqrtf(rb_ref_dot(d, d));
+            float inv = 1.0f / rb_ref_maxf(dist, 1e-8f);
+            l[0] = d[0] * inv;
+            l[1] = d[1] * inv;
+            l[2] = d[2] * inv;
+            atten = rb_ref_light_falloff(dist, L->range);
+            if (L->type == RB_LIGHT_SPOT) {
+                float to_surface[3] = {-l[0], -l[1], -l[2]};
+                atten *= rb_ref_spot_factor(L->direction, to_surface, L->cos_inner, L->cos_outer);
+            }
+        }
+        float ndl = rb_ref_dot(s->n, l);
+        if (ndl <= 0.0f || atten <= 0.0f || rb_ref_dot(s->ng, l) <= 0.0f)
+            continue;
+        float f[3];
+        rb_reference_brdf(s->n, b->v, l, s->c_diff, s->f0, s->f90, s->roughness, f);
+        float c[3];
+        for (int k = 0; k < 3; k++)
+            c[k] = f[k] * L->color[k] * atten * ndl;
+        if (is_black(c))
+            continue;
+        float org[3];
+        rb_ref_offset(s->p, s->ng, org);
+        (*rays)++;
+        if (rb_ref_occluded(w, org, l, dist < INFINITY ? dist * (1.0f - SHADOW_SHORTEN) : dist))
+            continue;
+        for (int k = 0; k < 3; k++)
+            acc[k] += beta[k] * c[k];
+    }
+}
+
+static uint32_t pick_emitter(const struct rb_ref_world *w, float u)
+{
+    uint32_t lo = 0, hi = w->emitter_count;
+    while (hi - lo > 1) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (w->emitter_cdf[mid] <= u)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    while (lo + 1 < w->emitter_count && !(w->emitter_cdf[lo + 1] > w->emitter_cdf[lo]))
+        lo++;
+    return w->emitters[lo];
+}
+
+/* |cos| between triangle prim's face and unit direction l. */
+static float face_cos(const struct rb_ref_world *w, uint32_t prim, const float l[3])
+{
+    const uint32_t *tri = &w->tris[(size_t)prim * 3];
+    const float *p0 = &w->pos[tri[0] * 4], *p1 = &w->pos[tri[1] * 4], *p2 = &w->pos[tri[2] * 4];
+    float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+    float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+    float n[3];
+    rb_ref_cross(e1, e2, n);
+    float len = sqrtf(rb_ref_dot(n, n));
+    return len > 0.0f ? fabsf(rb_ref_dot(n, l)) / len : 0.0f;
+}
+
+/* One point on one emissive triangle, chosen by power, then uniformly by area. */
+static void nee_area(const struct rb_ref_world *w, const struct rb_ref_surface *s,
+                     const struct rb_ref_bsdf *b, const float beta[3], float acc[3], uint64_t key,
+                     uint32_t dim, uint64_t *rays)
+{
+    uint32_t prim = pick_emitter(w, rb_ref_rand(key, dim + DIM_EMIT_PICK));
+    float su = sqrtf(rb_ref_rand(key, dim + DIM_EMIT_U)), r = rb_ref_rand(key, dim + DIM_EMIT_V);
+    float bu = su * (1.0f - r), bv = su * r;
+    float q[3];
+    rb_ref_hit_point(w, prim, bu, bv, q);
+    float d[3] = {q[0] - s->p[0], q[1] - s->p[1], q[2] - s->p[2]};
+    float dist2 = rb_ref_dot(d, d), dist = sqrtf(dist2);
+    if (!(dist > 0.0f))
+        return;
+    float l[3] = {d[0] / dist, d[1] / dist, d[2] / dist};
+    float cos_l = face_cos(w, prim, l);
+    if (!(cos_l > 0.0f))
+        return;
+    float pdf = w->emit_pdf_area[prim] * dist2 / cos_l;
+    if (!(pdf > 0.0f) || !(pdf < INFINITY))
+        return;
+    float f[3], le[3];
+    rb_ref_bsdf_eval(b, l, f);
+    if (is_black(f))
+        return;
+    rb_ref_emission(w, prim, bu, bv, le);
+    if (is_black(le))
+        return;
+    float org[3];
+    rb_ref_offset(s->p, s->ng, org);
+    (*rays)++;
+    if (rb_ref_occluded(w, org, l, dist * (1.0f - SHADOW_SHORTEN)))
+        return;
+    add_scaled(acc, beta, f, le, power_heuristic(pdf, rb_ref_bsdf_pdf(b, l)) / pdf);
+}
+
+static void nee_env(const struct rb_ref_world *w, const struct rb_ref_surface *s,
+                    const struct rb_ref_bsdf *b, const float beta[3], float acc[3], uint64_t key,
+                    uint32_t dim, uint64_t *rays)
+{
+    float l[3];
+    float pdf = rb_ref_env_sample(w->env, s->n, rb_ref_rand(key, dim + DIM_ENV_U),
+                                  rb_ref_rand(key, dim + DIM_ENV_V), l);
+    if (!(pdf > 0.0f))
+        return;
+    float f[3], le[3];
+    rb_ref_bsdf_eval(b, l, f);
+    if (is_black(f))
+        return;
+    rb_ref_env_eval(w->env, l, le);
+    if (is_black(le))
+        return;
+    float org[3];
+    rb_ref_offset(s->p, s->ng, org);
+    (*rays)++;
+    if (rb_ref_occluded(w, org, l, INFINITY))
+        return;
+    add_scaled(acc, beta, f, le, power_heuristic(pdf, rb_ref_bsdf_pdf(b, l)) / pdf);
+}
+
+void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
+                         const float dir0[3], uint32_t pixel, uint32_t sample, float direct[3],
+                         float indirect[3], uint64_t *rays)
+{
+    uint64_t key = rb_ref_rand_key(w->frame, pixel, sample);
+    struct rb_ref_surface s;
+    rb_ref_surface_eval(w, hit->prim, hit->u, hit->v, dir0, &s);
+    for (int i = 0; i < 3; i++)
+        direct[i] += s.emission[i];
+
+    /* How many bounces past x1 the path may take, and what each vertex may gather. */
+    uint32_t bounces = w->max_bounces;
+    bool has_area = w->paths == RB_PATHS_FULL && w->emitter_count > 0;
+    bool has_env = w->paths != RB_PATHS_DIRECT && !w->env->is_black;
+    if (w->paths == RB_PATHS_DIRECT)
+        bounces = 0;
+    else if (w->paths == RB_PATHS_BDPT && bounces > 2)
+        bounces = 2;
+
+    float beta[3] = {1.0f, 1.0f, 1.0f}, dir[3] = {dir0[0], dir0[1], dir0[2]};
+    for (uint32_t k = 1;; k++) {
+        float *acc = k == 1 ? direct : indirect;
+        bool do_area = has_area;
+        bool do_env = has_env && (w->paths == RB_PATHS_FULL || k == 1);
+        bool do_continue = k <= bounces;
+        uint32_t dim = k * DIMS_PER_VERTEX;
+        float v[3] = {-dir[0], -dir[1], -dir[2]};
+        struct rb_ref_bsdf b;
+        rb_ref_bsdf_init(&b, &s, v);
+
+        nee_punctual(w, &s, &b, beta, acc, rays);
+        if (do_area)
+            nee_area(w, &s, &b, beta, acc, key, dim, rays);
+        if (do_env)
+            nee_env(w, &s, &b, beta, acc, key, dim, rays);
+        if (!do_continue && !do_area && !do_env)
+            break;
+
+        /* The BSDF sample: it finds emitters and the environment (MIS'd against the light
+         * samples above) and, where allowed, the next vertex. */
+        float l[3];
+        float pdf = rb_ref_bsdf_sample(&b, rb_ref_rand(key, dim + DIM_LOBE),
+                                       rb_ref_rand(key, dim + DIM_DIR0),
+                                       rb_ref_rand(key, dim + DIM_DIR1), l);
+        if (!(pdf > 0.0f))
+            break;
+        float f[3];
+        rb_ref_bsdf_eval(&b, l, f);
+        if (is_black(f))
+            break;
+        float weight[3] = {f[0] / pdf, f[1] / pdf, f[2] / pdf};
+        float org[3];
+        rb_ref_offset(s.p, s.ng, org);
+        struct rb_ref_hit h;
+        rb_ref_intersect(w, false, org, l, 0.0f, INFINITY, &h);
+        (*rays)++;
+        if (h.prim == RB_REF_NONE) {
+            if (do_env) {
+                float le[3];
+                rb_ref_env_eval(w->env, l, le);
+                float mis = power_heuristic(pdf, rb_ref_env_pdf(w->env, s.n, l));
+                add_scaled(acc, beta, weight, le, mis);
+            }
+            break;
+        }
+        struct rb_ref_surface next;
+        rb_ref_surface_eval(w, h.prim, h.u, h.v, l, &next);
+        if (do_area && !is_black(next.emission)) {
+            float cos_l = face_cos(w, h.prim, l);
+            float pdf_light =
+                cos_l > 0.0f ? w->emit_pdf_area[h.prim] * h.t * h.t / cos_l : INFINITY;
+            add_scaled(acc, beta, weight, next.emission, power_heuristic(pdf, pdf_light));
+        }
+        if (!do_continue)
+            break;
+        for (int i = 0; i < 3; i++)
+            beta[i] *= weight[i];
+        if (k > w->rr_depth) {
+            float q = rb_clampf(rb_ref_maxf(beta[0], rb_ref_maxf(beta[1], beta[2])), 0.05f, 0.95f);
+            if (rb_ref_rand(key, dim + DIM_RR) >= q)
+                break;
+            for (int i = 0; i < 3; i++)
+                beta[i] /= q;
+        }
+        s = next;
+        dir[0] = l[0];
+        dir[1] = l[1];
+        dir[2] = l[2];
+    }
+}

@@ -1,0 +1,94 @@
+#!/bin/sh
+# The CPU reference: the same files and layers as render, deterministic across thread counts
+# and runs, in agreement with the GPU direct integrator in the direct path space, and able to
+# render every shared scene.
+. tests/integration/lib.sh
+
+small="--size 96x54 --frames 3 -q"
+rb reference jobs/demo.yaml $small --spp 8 --out "$T/ref"
+expect_exit 0 "reference renders a demo frame"
+exr="$T/ref/frame.0003.exr"
+oiiotool --info -v "$exr" >"$T/info" 2>&1
+for ch in R G B A direct.R indirect.R albedo.R normal.X depth.Z motion.X; do
+    check "reference EXR has $ch" grep -q "[ ,]$ch[,\" ]\|[ ,]$ch\$" "$T/info"
+done
+check "EXR says integrator reference" grep -qF 'raybundle:integrator: "reference"' "$T/info"
+check "EXR records the samples reached" grep -qF 'raybundle:spp: 8' "$T/info"
+check "timing records spp and rays" sh -c "grep -q '\"spp\": 8' '$T/ref/frame.0003.timing.json' && grep -q '\"rays\": [1-9]' '$T/ref/frame.0003.timing.json'"
+tap_run "$BUILD/tests/tools/exrstat" "$exr" indirect.G 0.001
+
+rb render jobs/demo.yaml $small --integrator reference --spp 8 --out "$T/ref-render"
+expect_exit 0 "render --integrator reference works too"
+check "render --integrator reference gives the same bits" cmp -s "$exr" "$T/ref-render/frame.0003.exr"
+
+# Determinism: thread counts and repeated runs.
+rb reference jobs/demo.yaml $small --spp 8 --threads 1 --out "$T/t1"
+expect_exit 0 "reference with 1 thread"
+rb reference jobs/demo.yaml $small --spp 8 --threads 2 --out "$T/t2"
+expect_exit 0 "reference with 2 threads"
+check "1 and 2 threads give identical bits" cmp -s "$T/t1/frame.0003.exr" "$T/t2/frame.0003.exr"
+check "a second run gives identical bits" cmp -s "$T/t2/frame.0003.exr" "$exr"
+
+# A time limit stops at a whole pass and says how far it got.
+rb reference jobs/demo.yaml $small --spp 100000 --time-limit 0.5 --out "$T/tl"
+expect_exit 0 "reference with a time limit"
+spp=$(sed -n 's/.*"spp": \([0-9]*\).*/\1/p' "$T/tl/frame.0003.timing.json")
+check "the time limit stopped early at $spp spp" test "${spp:-0}" -ge 1 -a "${spp:-0}" -lt 100000
+
+# Agreement with the GPU direct integrator in the direct path space. In that space the
+# reference has no noise (delta lights, one ray per pixel centre), so the difference is the GPU's
+# shadow maps against exact visibility: pixels within 1 px of a radiance discontinuity in the
+# reference (a second difference above 20%) are excluded, at most 15% of the image, and the rest
+# must agree within relMSE 1e-3.
+agree() { # agree NAME JOB ARGS...
+    name=$1
+    job=$2
+    shift 2
+    rb render "$job" "$@" --out "$T/$name-gpu" -q
+    expect_exit 0 "$name: GPU direct renders"
+    rb reference "$job" "$@" --spp 1 --set integrator.reference.paths=direct --out "$T/$name-ref" -q
+    expect_exit 0 "$name: reference (direct path space) renders"
+    frac=$("$BUILD/tests/tools/edgemask" "$T/$name-ref/frame.$F.exr" "$T/$name-mask.exr" 1 0.2)
+    check "$name: shadow/silhouette edges exclude $frac of the image (<= 0.15)" \
+        awk -v f="$frac" 'BEGIN { exit !(f <= 0.15) }'
+    rb compare "$T/$name-gpu/frame.$F.exr" "$T/$name-ref/frame.$F.exr" --mask "$T/$name-mask.exr" \
+        --max-relmse 1e-3
+    if [ "$status" -eq 0 ]; then
+        ok "$name: GPU direct and reference agree within relMSE 1e-3 ($(grep -i relmse "$T/stdout" | head -n 1 | tr -s ' '))"
+    else
+        not_ok "$name: GPU direct and reference agree within relMSE 1e-3" "$(cat "$T/stdout" "$T/stderr" | head -n 20)"
+    fi
+}
+F=0005
+agree demo jobs/demo.yaml --size 320x180 --frames 5
+"$BUILD/tests/tools/analytic" scene "$T" || not_ok "analytic scene written"
+cat >"$T/point.yaml" <<YAML
+scene: plane.gltf
+output: point/frame.####.exr
+resolution: [320, 200]
+frames: {start: 0, end: 0}
+camera:
+  fov_y_deg: 60
+  keys: [{t: 0, position: [0, 6, 4], look_at: [0, 0, 0]}]
+lights:
+  - {type: point, position: [0, 2, 0], color: [1, 1, 1], intensity: 10}
+  - {type: spot, position: [-2, 2, 0], direction: [0, -1, 0], intensity: 20, inner_cone_deg: 20, outer_cone_deg: 30}
+YAML
+F=0000
+agree analytic "$T/point.yaml"
+# With no emitters and no environment, the full path space at 0 bounces is the same set of paths.
+rb reference "$T/point.yaml" --spp 1 --set integrator.reference.max_bounces=0 --out "$T/full0" -q
+expect_exit 0 "analytic: reference (full path space, 0 bounces) renders"
+rb compare "$T/analytic-gpu/frame.0000.exr" "$T/full0/frame.0000.exr" --mask "$T/analytic-mask.exr" \
+    --max-relmse 1e-3
+expect_exit 0 "analytic: GPU direct and reference at 0 bounces agree within relMSE 1e-3"
+
+# Every shared scene renders one frame at low spp.
+S=${RB_SCENES:-../shared/scenes}
+for scene in "$S"/*/*.glb "$S"/*/*.gltf; do
+    [ -f "$scene" ] || continue
+    name=$(basename "$scene")
+    rb reference "$scene" --frames 0 --size 64x48 --spp 2 --out "$T/shared-$name" -q
+    expect_exit 0 "reference renders $name"
+done
+done_testing
