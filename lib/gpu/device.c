@@ -395,15 +395,19 @@ enum rb_status rb_gpu_create(const struct rb_gpu_desc *desc, struct rb_gpu **out
         goto fail;
     }
     struct {
-        VkSamplerAddressMode mode;
+        VkSamplerAddressMode mode_u, mode_v;
         VkFilter filter;
         VkSampler *out;
         const char *name;
     } samplers[] = {
-        {VK_SAMPLER_ADDRESS_MODE_REPEAT, VK_FILTER_LINEAR, &gpu->linear_sampler, "linear"},
-        {VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_FILTER_LINEAR, &gpu->clamp_sampler, "clamp"},
-        {VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_FILTER_NEAREST, &gpu->nearest_sampler,
-         "nearest"},
+        {VK_SAMPLER_ADDRESS_MODE_REPEAT, VK_SAMPLER_ADDRESS_MODE_REPEAT, VK_FILTER_LINEAR,
+         &gpu->linear_sampler, "linear"},
+        {VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+         VK_FILTER_LINEAR, &gpu->clamp_sampler, "clamp"},
+        {VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+         VK_FILTER_NEAREST, &gpu->nearest_sampler, "nearest"},
+        {VK_SAMPLER_ADDRESS_MODE_REPEAT, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_FILTER_LINEAR,
+         &gpu->env_sampler, "environment"},
     };
     for (size_t i = 0; i < sizeof(samplers) / sizeof(samplers[0]); i++) {
         VkSamplerCreateInfo sci = {
@@ -413,9 +417,9 @@ enum rb_status rb_gpu_create(const struct rb_gpu_desc *desc, struct rb_gpu **out
             .mipmapMode = samplers[i].filter == VK_FILTER_LINEAR
                               ? VK_SAMPLER_MIPMAP_MODE_LINEAR
                               : VK_SAMPLER_MIPMAP_MODE_NEAREST,
-            .addressModeU = samplers[i].mode,
-            .addressModeV = samplers[i].mode,
-            .addressModeW = samplers[i].mode,
+            .addressModeU = samplers[i].mode_u,
+            .addressModeV = samplers[i].mode_v,
+            .addressModeW = samplers[i].mode_v,
             .maxLod = VK_LOD_CLAMP_NONE,
         };
         if ((vr = vkCreateSampler(gpu->device, &sci, NULL, samplers[i].out)) < 0) {
@@ -437,6 +441,7 @@ void rb_gpu_destroy(struct rb_gpu *gpu)
         return;
     if (gpu->device) {
         vkDeviceWaitIdle(gpu->device);
+        vkDestroySampler(gpu->device, gpu->env_sampler, NULL);
         vkDestroySampler(gpu->device, gpu->nearest_sampler, NULL);
         vkDestroySampler(gpu->device, gpu->clamp_sampler, NULL);
         vkDestroySampler(gpu->device, gpu->linear_sampler, NULL);

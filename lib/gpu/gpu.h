@@ -39,6 +39,7 @@ struct rb_gpu {
     VkSampler linear_sampler;  /* repeat, trilinear */
     VkSampler clamp_sampler;   /* clamp to edge, linear */
     VkSampler nearest_sampler; /* clamp to edge, nearest */
+    VkSampler env_sampler;     /* equirectangular maps: u repeats (azimuth), v clamps; linear */
 
     /* timestamps: 2 queries per pass, recorded by rb_gpu_pass_begin/end */
     VkQueryPool queries;

@@ -53,7 +53,7 @@ void rb_pass_direct_record(struct rb_pass_direct *p, VkCommandBuffer cmd,
     rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, frame->shadow_maps.view,
                       p->gpu->nearest_sampler, VK_IMAGE_LAYOUT_GENERAL);
     rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, frame->env_map.view,
-                      p->gpu->linear_sampler, VK_IMAGE_LAYOUT_GENERAL);
+                      p->gpu->env_sampler, VK_IMAGE_LAYOUT_GENERAL);
     rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, frame->direct.view, VK_NULL_HANDLE,
                       VK_IMAGE_LAYOUT_GENERAL);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);

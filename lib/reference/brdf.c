@@ -6,20 +6,24 @@
 
 #include <math.h>
 
-void rb_reference_brdf(const float n[3], const float v[3], const float l[3], const float c_diff[3],
-                       const float f0[3], float f90, float roughness, float out[3])
+/* The pieces of the BRDF for one (n, v, l): the GLSL line by line, same clamps, same order of
+ * operations, single precision (pow(y, 5) by multiplication). D = a2 / (pi d^2) is left to the
+ * caller, so that the sampler can cancel it (see sample_weight). False: no light from l. */
+struct brdf_terms {
+    float ndl, a2, d, V, fw;
+};
+
+static bool brdf_terms(const float n[3], const float v[3], const float l[3], float roughness,
+                       struct brdf_terms *t)
 {
-    /* Line by line the GLSL: same clamps, same order of operations, single precision (pow(y, 5)
-     * by multiplication). */
     float ndl = rb_ref_maxf(rb_ref_dot(n, l), 0.0f);
     float ndv = rb_ref_maxf(rb_ref_dot(n, v), 1e-4f);
-    out[0] = out[1] = out[2] = 0.0f;
     if (ndl <= 0.0f)
-        return;
+        return false;
     float h[3] = {l[0] + v[0], l[1] + v[1], l[2] + v[2]};
     float hl = sqrtf(rb_ref_dot(h, h));
     if (!(hl > 0.0f))
-        return; /* l == -v: normalize() has no answer (GLSL gives NaN) */
+        return false; /* l == -v: normalize() has no answer (GLSL gives NaN) */
     h[0] /= hl;
     h[1] /= hl;
     h[2] /= hl;
@@ -27,15 +31,27 @@ void rb_reference_brdf(const float n[3], const float v[3], const float l[3], con
     float vdh = rb_ref_maxf(rb_ref_dot(v, h), 0.0f);
     float a = rb_ref_maxf(roughness * roughness, 1e-4f);
     float a2 = a * a;
-    float fw = rb_ref_pow5(1.0f - vdh);
-    float d = ndh * ndh * (a2 - 1.0f) + 1.0f;
-    float D = a2 / (RB_PI * d * d);
+    t->ndl = ndl;
+    t->a2 = a2;
+    t->fw = rb_ref_pow5(1.0f - vdh);
+    t->d = ndh * ndh * (a2 - 1.0f) + 1.0f;
     float vis_den =
         ndl * sqrtf(ndv * ndv * (1.0f - a2) + a2) + ndv * sqrtf(ndl * ndl * (1.0f - a2) + a2);
-    float V = vis_den > 0.0f ? 0.5f / vis_den : 0.0f;
+    t->V = vis_den > 0.0f ? 0.5f / vis_den : 0.0f;
+    return true;
+}
+
+void rb_reference_brdf(const float n[3], const float v[3], const float l[3], const float c_diff[3],
+                       const float f0[3], float f90, float roughness, float out[3])
+{
+    struct brdf_terms t;
+    out[0] = out[1] = out[2] = 0.0f;
+    if (!brdf_terms(n, v, l, roughness, &t))
+        return;
+    float D = t.a2 / (RB_PI * t.d * t.d);
     for (int i = 0; i < 3; i++) {
-        float F = f0[i] + (f90 - f0[i]) * fw;
-        out[i] = (1.0f - F) * c_diff[i] / RB_PI + F * D * V;
+        float F = f0[i] + (f90 - f0[i]) * t.fw;
+        out[i] = (1.0f - F) * c_diff[i] / RB_PI + F * D * t.V;
     }
 }
 
@@ -149,7 +165,42 @@ float rb_ref_bsdf_pdf(const struct rb_ref_bsdf *b, const float l[3])
     return b->p_spec * ps + (1.0f - b->p_spec) * pd;
 }
 
-float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, float u1, float l[3])
+/* f cos / pdf for a sampled l, and the pdf, with GGX's D divided out of both. Near a mirror
+ * (alpha down at 1e-4) single precision cannot evaluate D = a2 / (pi d^2) at the peak (d loses
+ * every digit, down to 0), but it scales the specular value and the specular pdf alike, so
+ * their ratio, F V cos 4 (n.v) / G1 for a metal, stays exact. */
+static float sample_weight(const struct rb_ref_bsdf *b, const float l[3], float weight[3])
+{
+    const struct rb_ref_surface *s = b->s;
+    struct brdf_terms t;
+    weight[0] = weight[1] = weight[2] = 0.0f;
+    if (rb_ref_dot(s->ng, l) <= 0.0f || !brdf_terms(s->n, b->v, l, s->roughness, &t))
+        return rb_ref_bsdf_pdf(b, l);
+    float cos = t.ndl;
+    float inv_d = RB_PI * t.d * t.d / t.a2; /* 1 / D, finite, 0 where D overflows */
+    float diff_pdf = (1.0f - b->p_spec) * cos / RB_PI;
+    float spec_pdf_d = b->p_spec > 0.0f
+                           ? b->p_spec * smith_g1(b->alpha, b->vs[2]) / (4.0f * b->vs[2])
+                           : 0.0f; /* the specular pdf over D */
+    if (spec_pdf_d > 0.0f) {
+        float den = spec_pdf_d + diff_pdf * inv_d;
+        for (int i = 0; i < 3; i++) {
+            float F = s->f0[i] + (s->f90 - s->f0[i]) * t.fw;
+            float fd = (1.0f - F) * s->c_diff[i] / RB_PI;
+            weight[i] = (F * t.V * cos + fd * cos * inv_d) / den;
+        }
+        return inv_d > 0.0f ? den / inv_d : INFINITY;
+    }
+    /* no specular lobe to sample means no specular reflection (F is 0): Lambert alone */
+    if (!(diff_pdf > 0.0f))
+        return 0.0f;
+    for (int i = 0; i < 3; i++)
+        weight[i] = s->c_diff[i] / RB_PI * cos / diff_pdf;
+    return diff_pdf;
+}
+
+float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, float u1, float l[3],
+                         float weight[3])
 {
     float ll[3];
     if (u_lobe < b->p_spec) {
@@ -179,8 +230,10 @@ float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, fl
             nh[i] = t1 * t1v[i] + t2 * t2v[i] + tz * vh[i];
         float ne[3] = {a * nh[0], a * nh[1], rb_ref_maxf(nh[2], 0.0f)};
         float nl = sqrtf(rb_ref_dot(ne, ne));
-        if (!(nl > 0.0f))
+        if (!(nl > 0.0f)) {
+            weight[0] = weight[1] = weight[2] = 0.0f;
             return 0.0f;
+        }
         for (int i = 0; i < 3; i++)
             ne[i] /= nl;
         float vdh = rb_ref_dot(b->vs, ne);
@@ -195,10 +248,12 @@ float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, fl
     }
     to_world(b, ll, l);
     float len = sqrtf(rb_ref_dot(l, l));
-    if (!(len > 0.0f))
+    if (!(len > 0.0f)) {
+        weight[0] = weight[1] = weight[2] = 0.0f;
         return 0.0f;
+    }
     l[0] /= len;
     l[1] /= len;
     l[2] /= len;
-    return rb_ref_bsdf_pdf(b, l);
+    return sample_weight(b, l, weight);
 }

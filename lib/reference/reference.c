@@ -5,23 +5,24 @@
  * - Every sample of a pixel uses the one camera ray through the pixel centre, the rasterizer's
  *   sample position (clipped to the camera's near and far planes, skipping back faces of
  *   single-sided materials and alpha-masked texels, as the G-buffer's discards do). So the
- *   reference and the GPU integrators differ only in light transport, never in coverage; edges
+ *   reference and the GPU integrators differ only in light transport, never in coverage: edges
  *   are aliased exactly like the G-buffer's, and the AOVs are exact.
  * - Geometry, materials, textures, punctual lights and the environment are shaders/animate.comp,
- *   gbuffer.frag, brdf.glsl and lights.glsl transcribed (see deform.c, material.c, brdf.c,
+ *   gbuffer.frag, brdf.glsl and lights.glsl transcribed (deform.c, material.c, brdf.c,
  *   lights.c); textures are filtered at their own resolution without mipmaps.
  * - Shadow and bounce rays hit both sides of every triangle (the shadow maps cull nothing);
- *   emission leaves both sides. The environment map is read bilinearly with u repeating and v
+ *   emission leaves both sides. The environment map is read bilinearly, u repeating and v
  *   clamped at the poles.
  * - Light transport (trace.c): path tracing with next-event estimation; MIS with the power
- *   heuristic between BSDF sampling and emitter/environment sampling; one-sample MIS over the
- *   two BRDF lobes; Russian roulette after rr_depth bounces with survival = the throughput's
- *   largest component clamped to [0.05, 0.95].
+ *   heuristic (beta 2) between BSDF sampling and emitter/environment sampling; one-sample MIS
+ *   over the two BRDF lobes; Russian roulette after rr_depth bounces, survival = the
+ *   throughput's largest component clamped to [0.05, 0.95].
  * - Path spaces: FULL counts every path up to max_bounces bounces past the first hit. DIRECT is
  *   the direct integrator's: emission at x1, punctual lights at x1 (exact visibility), the
- *   environment on camera misses. BDPT is BDPT.md's: DIRECT plus the environment's light at x1
- *   (light and BSDF samples, MIS) plus punctual light after one and two bounces (x2, x3);
- *   emissive triangles light nothing but themselves.
+ *   environment on camera misses; it draws no random numbers, so its samples after the first are
+ *   copies. BDPT is BDPT.md's: DIRECT plus the environment's light at x1 (light and BSDF
+ *   samples, MIS) plus punctual light after one and two bounces (at x2, x3); emissive triangles
+ *   light nothing but themselves.
  * - Layers: direct = emission at x1 + light reaching x1 after exactly one scattering + the
  *   environment on camera misses; indirect = the rest; beauty = direct + indirect, alpha 1 on a
  *   hit and 0 on a miss. AOVs from the first hit: albedo (c_diff), shading normal, view depth,
@@ -209,7 +210,10 @@ static enum rb_status build_mesh(struct rb_reference *ref, struct rb_err *err)
 
 static enum rb_status build_embree(struct rb_reference *ref, struct rb_err *err)
 {
-    ref->device = rtcNewDevice(NULL);
+    /* BVH builds use the same number of threads as the tracing, so --threads is a budget */
+    char config[64];
+    snprintf(config, sizeof(config), "threads=%u", ref->thread_count);
+    ref->device = rtcNewDevice(config);
     if (!ref->device)
         return rb_errf(err, RB_E_EXTERNAL, "embree: cannot create a device (error %d)",
                        (int)rtcGetDeviceError(NULL));

@@ -173,8 +173,10 @@ void rb_ref_bsdf_init(struct rb_ref_bsdf *b, const struct rb_ref_surface *s, con
 void rb_ref_bsdf_eval(const struct rb_ref_bsdf *b, const float l[3], float out[3]);
 /* The combined pdf (solid angle) of both lobes for l. */
 float rb_ref_bsdf_pdf(const struct rb_ref_bsdf *b, const float l[3]);
-/* Samples l; returns its combined pdf, 0 when nothing could be sampled. */
-float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, float u1, float l[3]);
+/* Samples l; returns its combined pdf (0 when nothing could be sampled; infinite for a mirror
+ * direction single precision cannot resolve) and writes weight = BSDF value / pdf. */
+float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, float u1, float l[3],
+                         float weight[3]);
 
 /* ---- the integrator (trace.c) --------------------------------------------------------------- */
 

@@ -35,9 +35,11 @@ static float power_heuristic(float a, float b)
     return a2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
 }
 
+/* True for no light, and for what single precision could not evaluate (a GGX peak near a
+ * mirror overflows), which is dropped rather than spread as NaN. */
 static bool is_black(const float c[3])
 {
-    return !(c[0] > 0.0f || c[1] > 0.0f || c[2] > 0.0f);
+    return !(c[0] > 0.0f || c[1] > 0.0f || c[2] > 0.0f) || !(c[0] + c[1] + c[2] < INFINITY);
 }
 
 static void add_scaled(float acc[3], const float beta[3], const float a[3], const float b[3],
@@ -224,17 +226,12 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
 
         /* The BSDF sample: it finds emitters and the environment (MIS'd against the light
          * samples above) and, where allowed, the next vertex. */
-        float l[3];
+        float l[3], weight[3];
         float pdf = rb_ref_bsdf_sample(&b, rb_ref_rand(key, dim + DIM_LOBE),
                                        rb_ref_rand(key, dim + DIM_DIR0),
-                                       rb_ref_rand(key, dim + DIM_DIR1), l);
-        if (!(pdf > 0.0f))
+                                       rb_ref_rand(key, dim + DIM_DIR1), l, weight);
+        if (!(pdf > 0.0f) || is_black(weight))
             break;
-        float f[3];
-        rb_ref_bsdf_eval(&b, l, f);
-        if (is_black(f))
-            break;
-        float weight[3] = {f[0] / pdf, f[1] / pdf, f[2] / pdf};
         float org[3];
         rb_ref_offset(s.p, s.ng, org);
         struct rb_ref_hit h;
@@ -249,6 +246,8 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
             }
             break;
         }
+        if (!do_area && !do_continue)
+            break;
         struct rb_ref_surface next;
         rb_ref_surface_eval(w, h.prim, h.u, h.v, l, &next);
         if (do_area && !is_black(next.emission)) {

@@ -83,6 +83,27 @@ rb compare "$T/analytic-gpu/frame.0000.exr" "$T/full0/frame.0000.exr" --mask "$T
     --max-relmse 1e-3
 expect_exit 0 "analytic: GPU direct and reference at 0 bounces agree within relMSE 1e-3"
 
+# The environment seen directly: a rotated gradient map, the same on both sides (the mapping,
+# the rotation and the bilinear filtering with u wrapping and v clamped).
+oiiotool --pattern fill:topleft=1,0,0:topright=0,1,0:bottomleft=0,0,1:bottomright=1,1,1 64x32 3 \
+    -d float -o "$T/sky.exr"
+cat >"$T/sky.yaml" <<YAML
+scene: plane.gltf
+output: sky/frame.####.exr
+resolution: [96, 64]
+frames: {start: 0, end: 0}
+camera:
+  fov_y_deg: 100
+  keys: [{t: 0, position: [0, 1, 0], look_at: [0.3, 5, 1.2]}]
+environment: {map: sky.exr, intensity: 1.5, rotation_deg: 30}
+YAML
+rb render "$T/sky.yaml" --out "$T/sky-gpu" -q
+expect_exit 0 "sky: GPU renders"
+rb reference "$T/sky.yaml" --spp 1 --set integrator.reference.paths=direct --out "$T/sky-ref" -q
+expect_exit 0 "sky: reference renders"
+rb compare "$T/sky-gpu/frame.0000.exr" "$T/sky-ref/frame.0000.exr" --max-relmse 1e-5
+expect_exit 0 "sky: the environment background agrees within relMSE 1e-5"
+
 # Every shared scene renders one frame at low spp.
 S=${RB_SCENES:-../shared/scenes}
 for scene in "$S"/*/*.glb "$S"/*/*.gltf; do
