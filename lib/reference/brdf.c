@@ -57,7 +57,7 @@ void rb_reference_brdf(const float n[3], const float v[3], const float l[3], con
 
 /* An orthonormal basis around unit n (Duff et al. 2017, "Building an Orthonormal Basis,
  * Revisited"). */
-static void basis(const float n[3], float t[3], float b[3])
+void rb_ref_basis(const float n[3], float t[3], float b[3])
 {
     float sign = copysignf(1.0f, n[2]);
     float a = -1.0f / (sign + n[2]);
@@ -89,7 +89,7 @@ void rb_ref_bsdf_init(struct rb_ref_bsdf *b, const struct rb_ref_surface *s, con
     for (int i = 0; i < 3; i++)
         b->v[i] = v[i];
     b->alpha = rb_ref_maxf(s->roughness * s->roughness, 1e-4f);
-    basis(s->n, b->t, b->b);
+    rb_ref_basis(s->n, b->t, b->b);
     to_local(b, v, b->vs);
     /* VNDF sampling needs the view above the shading hemisphere: lift it to n.v = 1e-4, the
      * BRDF's own clamp. The pdf below uses the same lifted view, so it stays exact. */

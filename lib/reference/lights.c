@@ -194,14 +194,7 @@ float rb_ref_env_sample(const struct rb_ref_env *env, const float n[3], float u0
     if (!env->rgba) {
         /* A uniform environment: cosine-weighted around the shading normal. */
         float t[3], b[3];
-        float sign = copysignf(1.0f, n[2]);
-        float a = -1.0f / (sign + n[2]), c = n[0] * n[1] * a;
-        t[0] = 1.0f + sign * n[0] * n[0] * a;
-        t[1] = sign * c;
-        t[2] = -sign * n[0];
-        b[0] = c;
-        b[1] = sign + n[1] * n[1] * a;
-        b[2] = -n[1];
+        rb_ref_basis(n, t, b);
         float r = sqrtf(u0), phi = 2.0f * RB_PI * u1;
         float x = r * cosf(phi), y = r * sinf(phi), z = sqrtf(rb_ref_maxf(1.0f - u0, 0.0f));
         for (int i = 0; i < 3; i++)

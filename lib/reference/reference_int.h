@@ -103,6 +103,9 @@ void rb_ref_emission(const struct rb_ref_world *w, uint32_t prim, float u, float
 /* The material's base-colour alpha at (u, v) (factor x texture). */
 float rb_ref_alpha(const struct rb_ref_world *w, uint32_t prim, float u, float v);
 
+/* An orthonormal basis t, b around unit n (Duff et al. 2017, branchless; brdf.c). */
+void rb_ref_basis(const float n[3], float t[3], float b[3]);
+
 /* ---- deformation (deform.c) ------------------------------------------------------------------ */
 
 /* The world-space vertices of every instance of pose, in instance order (as frame.c lays them
