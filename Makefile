@@ -142,10 +142,13 @@ uninstall:
 		"$(DESTDIR)$(MANDIR)/man5/raybundle-job.5" "$(DESTDIR)$(DATADIR)/ocio/config.ocio"
 
 lint:
-	$(Q)tests/lint.sh
+	$(Q)FORMAT_SRC="$(FORMAT_SRC)" tests/lint.sh
+
+FORMAT_SRC = $(LIB_C) $(LIB_CXX) $(CMD_C) $(wildcard lib/*/*.h cmd/*.h) $(UNIT_SRC) $(TOOL_SRC) \
+	tools/mkdemo.c
 
 format:
-	$(Q)clang-format -i $(LIB_C) $(CMD_C) $(wildcard lib/*/*.h) $(UNIT_SRC)
+	$(Q)clang-format -i $(FORMAT_SRC)
 
 update-golden: $(BUILD)/raybundle
 	$(Q)BUILD=$(BUILD) tests/update-golden.sh

@@ -50,7 +50,7 @@ struct frame {
     int frame;
     double time_s;
     uint32_t width_px, height_px;
-    const float *pixels; /* RB_OUT_FLOATS per pixel */
+    const float *pixels;                              /* RB_OUT_FLOATS per pixel */
     struct rb_io_pass_time passes[RB_GPU_MAX_PASSES]; /* names point into pass_names */
     char pass_names[RB_GPU_MAX_PASSES][32];
     uint32_t pass_count;
@@ -96,8 +96,21 @@ static void usage(FILE *f, const char *command)
 
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum { O_FRAMES = 256, O_SIZE, O_OUTPUT, O_OUT, O_INTEGRATOR, O_SET, O_RESUME, O_PREVIEW,
-           O_DEVICE, O_VALIDATE, O_SPP, O_TIME_LIMIT, O_THREADS };
+    enum {
+        O_FRAMES = 256,
+        O_SIZE,
+        O_OUTPUT,
+        O_OUT,
+        O_INTEGRATOR,
+        O_SET,
+        O_RESUME,
+        O_PREVIEW,
+        O_DEVICE,
+        O_VALIDATE,
+        O_SPP,
+        O_TIME_LIMIT,
+        O_THREADS
+    };
     static const struct option opts[] = {
         {"frames", required_argument, NULL, O_FRAMES},
         {"size", required_argument, NULL, O_SIZE},
@@ -207,8 +220,7 @@ static int apply_cli(const struct options *o, struct rb_job *job)
     if (o->integrator) {
         enum rb_integrator_kind k = rb_integrator_from_name(o->integrator);
         if (k == RB_INTEGRATOR_DEFAULT) {
-            cmd_error("unknown integrator '%s' (direct, bdpt, hybrid, reference)",
-                      o->integrator);
+            cmd_error("unknown integrator '%s' (direct, bdpt, hybrid, reference)", o->integrator);
             return -1;
         }
         job->integrator.name = k;
@@ -282,29 +294,27 @@ static double now_s(void)
     return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
-static void progress(bool tty, int done, int total, int frame, double sec_per_frame,
-                     bool skipped)
+static void progress(bool tty, int done, int total, int frame, double sec_per_frame, bool skipped)
 {
     if (tty) {
         int width = 30, fill = total ? done * width / total : width;
         double eta = sec_per_frame * (total - done);
         fprintf(stderr, "\r[%.*s%.*s] %d/%d frames  %.2f s/frame  ETA %.0f s ", fill,
-                "##############################", width - fill,
-                "                              ", done, total, sec_per_frame, eta);
+                "##############################", width - fill, "                              ",
+                done, total, sec_per_frame, eta);
         if (done == total)
             fputc('\n', stderr);
     } else if (skipped) {
         fprintf(stderr, "raybundle: frame %d (%d/%d) already complete, skipped\n", frame, done,
                 total);
     } else {
-        fprintf(stderr, "raybundle: frame %d (%d/%d) %.2f s\n", frame, done, total,
-                sec_per_frame);
+        fprintf(stderr, "raybundle: frame %d (%d/%d) %.2f s\n", frame, done, total, sec_per_frame);
     }
 }
 
 /* Splits the packed readback into the EXR's layers and writes it with its metadata. */
-static enum rb_status write_exr(const char *path, const struct rb_job *job,
-                                const struct frame *r, float *scratch, struct rb_err *err)
+static enum rb_status write_exr(const char *path, const struct rb_job *job, const struct frame *r,
+                                float *scratch, struct rb_err *err)
 {
     size_t n = (size_t)r->width_px * r->height_px;
     static const char *const rgba[] = {"R", "G", "B", "A"};
@@ -316,9 +326,9 @@ static enum rb_status write_exr(const char *path, const struct rb_job *job,
         uint32_t offset, count;
         const char *const *channels;
     } layers[] = {
-        {NULL, RB_OUT_BEAUTY, 4, rgba},    {"direct", RB_OUT_DIRECT, 3, rgb},
+        {NULL, RB_OUT_BEAUTY, 4, rgba},        {"direct", RB_OUT_DIRECT, 3, rgb},
         {"indirect", RB_OUT_INDIRECT, 3, rgb}, {"albedo", RB_OUT_ALBEDO, 3, rgb},
-        {"normal", RB_OUT_NORMAL, 3, xyz}, {"depth", RB_OUT_DEPTH, 1, z},
+        {"normal", RB_OUT_NORMAL, 3, xyz},     {"depth", RB_OUT_DEPTH, 1, z},
         {"motion", RB_OUT_MOTION, 2, xyz},
     };
     enum { LAYER_COUNT = sizeof(layers) / sizeof(layers[0]) };
@@ -338,7 +348,8 @@ static enum rb_status write_exr(const char *path, const struct rb_job *job,
     snprintf(hash, sizeof(hash), "%016llx", (unsigned long long)job->hash);
     struct rb_io_attr attrs[] = {
         {.name = "raybundle:version", .type = RB_IO_ATTR_STRING, .s = RB_VERSION},
-        {.name = "raybundle:integrator", .type = RB_IO_ATTR_STRING,
+        {.name = "raybundle:integrator",
+         .type = RB_IO_ATTR_STRING,
          .s = rb_integrator_name(job->integrator.name)},
         {.name = "raybundle:jobHash", .type = RB_IO_ATTR_STRING, .s = hash},
         {.name = "raybundle:frame", .type = RB_IO_ATTR_INT, .i = r->frame},
@@ -567,8 +578,7 @@ static int run(struct options *o, int argc, char **argv)
         rc = exit_for(st, false);
         goto out;
     }
-    if (job->environment.map &&
-        (st = load_env(job->environment.map, &env, &env_w, &env_h, &err))) {
+    if (job->environment.map && (st = load_env(job->environment.map, &env, &env_w, &env_h, &err))) {
         cmd_error("%s", err.msg);
         rc = exit_for(st, false);
         goto out;

@@ -13,7 +13,7 @@ libtinygltf-dev nlohmann-json3-dev
 libembree-dev
 libyaml-dev
 libcmocka-dev
-mandoc man-db time
+mandoc man-db time clang-format
 "
 
 missing=""

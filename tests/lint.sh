@@ -43,5 +43,16 @@ for f in cmd/*.c; do
         status=1
     fi
 done
+# Formatting: .clang-format, as `make format` applies it.
+if [ -z "${FORMAT_SRC:-}" ]; then
+    FORMAT_SRC=$(ls lib/*/*.c lib/*/*.cpp lib/*/*.h cmd/*.c cmd/*.h tests/unit/*.c tests/tools/*.c \
+        tools/mkdemo.c 2>/dev/null)
+fi
+# shellcheck disable=SC2086
+if ! out=$(clang-format --dry-run --Werror $FORMAT_SRC 2>&1); then
+    echo "$out" | grep 'error:' | head -n 20
+    echo "lint: run 'make format'"
+    status=1
+fi
 [ $status -eq 0 ] && echo "lint: clean"
 exit $status

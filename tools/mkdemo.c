@@ -84,7 +84,7 @@ static int add_view(struct demo *d, size_t length, int target)
         die("buffer overflow (%zu bytes)", offset + length);
     memset(d->bin + d->bin_len, 0, offset - d->bin_len);
     d->bin_len = offset + length;
-    d->views[d->view_count] = (struct view){ .offset = offset, .length = length, .target = target };
+    d->views[d->view_count] = (struct view){.offset = offset, .length = length, .target = target};
     return d->view_count++;
 }
 
@@ -117,8 +117,12 @@ static int add_floats(struct demo *d, const float *v, size_t count, const char *
     int comps = comps_of(type);
     int vi = add_view(d, count * comps * 4, target);
     unsigned char *p = d->bin + d->views[vi].offset;
-    struct accessor a = { .view = vi, .component_type = GL_FLOAT, .count = count, .type = type,
-                          .comps = comps, .has_minmax = with_minmax };
+    struct accessor a = {.view = vi,
+                         .component_type = GL_FLOAT,
+                         .count = count,
+                         .type = type,
+                         .comps = comps,
+                         .has_minmax = with_minmax};
     for (size_t i = 0; i < count * comps; i++) {
         uint32_t u;
         memcpy(&u, &v[i], 4);
@@ -148,16 +152,22 @@ static int add_indices(struct demo *d, const uint16_t *idx, size_t count)
         *p++ = (unsigned char)(idx[i] & 0xff);
         *p++ = (unsigned char)(idx[i] >> 8);
     }
-    return add_accessor(d, (struct accessor){ .view = vi, .component_type = GL_UNSIGNED_SHORT,
-                                              .count = count, .type = "SCALAR", .comps = 1 });
+    return add_accessor(d, (struct accessor){.view = vi,
+                                             .component_type = GL_UNSIGNED_SHORT,
+                                             .count = count,
+                                             .type = "SCALAR",
+                                             .comps = 1});
 }
 
 static int add_joints(struct demo *d, const uint8_t (*j)[4], size_t count)
 {
     int vi = add_view(d, count * 4, GL_ARRAY_BUFFER);
     memcpy(d->bin + d->views[vi].offset, j, count * 4);
-    return add_accessor(d, (struct accessor){ .view = vi, .component_type = GL_UNSIGNED_BYTE,
-                                              .count = count, .type = "VEC4", .comps = 4 });
+    return add_accessor(d, (struct accessor){.view = vi,
+                                             .component_type = GL_UNSIGNED_BYTE,
+                                             .count = count,
+                                             .type = "VEC4",
+                                             .comps = 4});
 }
 
 /*
@@ -167,8 +177,7 @@ static int add_joints(struct demo *d, const uint8_t (*j)[4], size_t count)
 static void geom_grid(struct geom *g, const double o[3], const double u[3], const double v[3],
                       int nu, int nv)
 {
-    double n[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-                    u[0] * v[1] - u[1] * v[0] };
+    double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
     double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     size_t base = g->vert_count, added = (size_t)(nu + 1) * (nv + 1);
 
@@ -191,7 +200,7 @@ static void geom_grid(struct geom *g, const double o[3], const double u[3], cons
         for (int i = 0; i < nu; i++) {
             uint16_t a = (uint16_t)(base + j * (nu + 1) + i);
             uint16_t b = (uint16_t)(a + 1), c = (uint16_t)(a + nu + 2), e = (uint16_t)(a + nu + 1);
-            uint16_t quad[6] = { a, b, c, a, c, e };
+            uint16_t quad[6] = {a, b, c, a, c, e};
             memcpy(&g->idx[g->index_count], quad, sizeof(quad));
             g->index_count += 6;
         }
@@ -209,7 +218,7 @@ struct prim {
 static void add_prim(struct demo *d, struct prim *out, const char *name, const struct geom *g,
                      int material)
 {
-    *out = (struct prim){ .name = name, .material = material, .joints = -1, .weights = -1 };
+    *out = (struct prim){.name = name, .material = material, .joints = -1, .weights = -1};
     out->position = add_floats(d, &g->pos[0][0], g->vert_count, "VEC3", GL_ARRAY_BUFFER, 1);
     out->normal = add_floats(d, &g->nrm[0][0], g->vert_count, "VEC3", GL_ARRAY_BUFFER, 0);
     out->indices = add_indices(d, g->idx, g->index_count);
@@ -219,17 +228,39 @@ static void add_prim(struct demo *d, struct prim *out, const char *name, const s
 enum { MAT_WHITE, MAT_RED, MAT_GREEN, MAT_PANEL, MAT_BOX, MAT_COLUMN, MAT_COUNT };
 
 /* Meshes, in the order they are written. */
-enum { MESH_FLOOR, MESH_CEILING, MESH_BACK, MESH_LEFT, MESH_RIGHT, MESH_PANEL, MESH_BOX,
-       MESH_COLUMN, MESH_COUNT };
+enum {
+    MESH_FLOOR,
+    MESH_CEILING,
+    MESH_BACK,
+    MESH_LEFT,
+    MESH_RIGHT,
+    MESH_PANEL,
+    MESH_BOX,
+    MESH_COLUMN,
+    MESH_COUNT
+};
 
 /* Nodes, in the order they are written. */
-enum { NODE_FLOOR, NODE_CEILING, NODE_BACK, NODE_LEFT, NODE_RIGHT, NODE_PANEL, NODE_LIGHT,
-       NODE_BOX, NODE_COLUMN, NODE_COLUMN_ROOT, NODE_COLUMN_TIP, NODE_CAMERA, NODE_COUNT };
+enum {
+    NODE_FLOOR,
+    NODE_CEILING,
+    NODE_BACK,
+    NODE_LEFT,
+    NODE_RIGHT,
+    NODE_PANEL,
+    NODE_LIGHT,
+    NODE_BOX,
+    NODE_COLUMN,
+    NODE_COLUMN_ROOT,
+    NODE_COLUMN_TIP,
+    NODE_CAMERA,
+    NODE_COUNT
+};
 
 /* The scene's fixed numbers, kept here so the JSON writer and the geometry agree. */
-static const double box_pos[3] = { -0.45, 0.25, -0.3 };
+static const double box_pos[3] = {-0.45, 0.25, -0.3};
 static const double box_bob_y = 0.55;
-static const double column_pos[3] = { 0.45, 0.0, 0.1 };
+static const double column_pos[3] = {0.45, 0.0, 0.1};
 static const double column_half = 0.15, column_height = 1.2, column_tip_y = 0.6;
 enum { COLUMN_SEGMENTS = 12, WALL_CELLS = 8 };
 
@@ -246,11 +277,11 @@ static void build_room(struct demo *d, struct prim *p)
         int material;
     } walls[] = {
         /* u x v points into the room. */
-        { "Floor", { -1, 0, -1 }, { 0, 0, 2 }, { 2, 0, 0 }, MAT_WHITE },
-        { "Ceiling", { -1, 2, -1 }, { 2, 0, 0 }, { 0, 0, 2 }, MAT_WHITE },
-        { "BackWall", { -1, 0, -1 }, { 2, 0, 0 }, { 0, 2, 0 }, MAT_WHITE },
-        { "LeftWall", { -1, 0, -1 }, { 0, 2, 0 }, { 0, 0, 2 }, MAT_RED },
-        { "RightWall", { 1, 0, -1 }, { 0, 0, 2 }, { 0, 2, 0 }, MAT_GREEN },
+        {"Floor", {-1, 0, -1}, {0, 0, 2}, {2, 0, 0}, MAT_WHITE},
+        {"Ceiling", {-1, 2, -1}, {2, 0, 0}, {0, 0, 2}, MAT_WHITE},
+        {"BackWall", {-1, 0, -1}, {2, 0, 0}, {0, 2, 0}, MAT_WHITE},
+        {"LeftWall", {-1, 0, -1}, {0, 2, 0}, {0, 0, 2}, MAT_RED},
+        {"RightWall", {1, 0, -1}, {0, 0, 2}, {0, 2, 0}, MAT_GREEN},
     };
     static struct geom g;
 
@@ -262,8 +293,8 @@ static void build_room(struct demo *d, struct prim *p)
 
     /* The light panel sits 1 mm under the ceiling and faces down (-Y). */
     g.vert_count = g.index_count = 0;
-    geom_grid(&g, (double[3]){ -0.2, 1.999, -0.2 }, (double[3]){ 0.4, 0, 0 },
-              (double[3]){ 0, 0, 0.4 }, 1, 1);
+    geom_grid(&g, (double[3]){-0.2, 1.999, -0.2}, (double[3]){0.4, 0, 0}, (double[3]){0, 0, 0.4}, 1,
+              1);
     add_prim(d, &p[MESH_PANEL], "LightPanel", &g, MAT_PANEL);
 }
 
@@ -274,18 +305,18 @@ static void build_box(struct demo *d, struct prim *p, struct anim_ids *ids)
         double o[3];
         int u, v; /* axes (0 x, 1 y, 2 z) with u x v = outward normal */
     } faces[] = {
-        { { 1, -1, -1 }, 1, 2 },  /* +X */
-        { { -1, -1, -1 }, 2, 1 }, /* -X */
-        { { -1, 1, -1 }, 2, 0 },  /* +Y */
-        { { -1, -1, -1 }, 0, 2 }, /* -Y */
-        { { -1, -1, 1 }, 0, 1 },  /* +Z */
-        { { -1, -1, -1 }, 1, 0 }, /* -Z */
+        {{1, -1, -1}, 1, 2},  /* +X */
+        {{-1, -1, -1}, 2, 1}, /* -X */
+        {{-1, 1, -1}, 2, 0},  /* +Y */
+        {{-1, -1, -1}, 0, 2}, /* -Y */
+        {{-1, -1, 1}, 0, 1},  /* +Z */
+        {{-1, -1, -1}, 1, 0}, /* -Z */
     };
     static struct geom g;
 
     g.vert_count = g.index_count = 0;
     for (int f = 0; f < 6; f++) {
-        double o[3], u[3] = { 0, 0, 0 }, v[3] = { 0, 0, 0 };
+        double o[3], u[3] = {0, 0, 0}, v[3] = {0, 0, 0};
         for (int c = 0; c < 3; c++)
             o[c] = faces[f].o[c] * h;
         u[faces[f].u] = e;
@@ -310,7 +341,7 @@ static void build_box(struct demo *d, struct prim *p, struct anim_ids *ids)
     ids->box_rot_q = add_floats(d, &q9[0][0], 9, "VEC4", 0, 0);
 
     /* Bob up and back down: y 0.25 -> 0.55 -> 0.25. */
-    float t3[3] = { 0.0f, 2.0f, 4.0f }, p3[3][3];
+    float t3[3] = {0.0f, 2.0f, 4.0f}, p3[3][3];
     for (int k = 0; k < 3; k++) {
         p3[k][0] = (float)box_pos[0];
         p3[k][1] = (float)(k == 1 ? box_bob_y : box_pos[1]);
@@ -336,17 +367,17 @@ static void build_column(struct demo *d, struct prim *p, struct anim_ids *ids)
 
     g.vert_count = g.index_count = 0;
     /* Sides: grids of 1 x 12 (or 12 x 1) quads, outward normals. */
-    geom_grid(&g, (double[3]){ x0 + w, 0, z0 }, (double[3]){ 0, hgt, 0 }, (double[3]){ 0, 0, w },
+    geom_grid(&g, (double[3]){x0 + w, 0, z0}, (double[3]){0, hgt, 0}, (double[3]){0, 0, w},
               COLUMN_SEGMENTS, 1); /* +X */
-    geom_grid(&g, (double[3]){ x0, 0, z0 }, (double[3]){ 0, 0, w }, (double[3]){ 0, hgt, 0 }, 1,
+    geom_grid(&g, (double[3]){x0, 0, z0}, (double[3]){0, 0, w}, (double[3]){0, hgt, 0}, 1,
               COLUMN_SEGMENTS); /* -X */
-    geom_grid(&g, (double[3]){ x0, 0, z0 + w }, (double[3]){ w, 0, 0 }, (double[3]){ 0, hgt, 0 },
-              1, COLUMN_SEGMENTS); /* +Z */
-    geom_grid(&g, (double[3]){ x0, 0, z0 }, (double[3]){ 0, hgt, 0 }, (double[3]){ w, 0, 0 },
+    geom_grid(&g, (double[3]){x0, 0, z0 + w}, (double[3]){w, 0, 0}, (double[3]){0, hgt, 0}, 1,
+              COLUMN_SEGMENTS); /* +Z */
+    geom_grid(&g, (double[3]){x0, 0, z0}, (double[3]){0, hgt, 0}, (double[3]){w, 0, 0},
               COLUMN_SEGMENTS, 1); /* -Z */
-    geom_grid(&g, (double[3]){ x0, hgt, z0 }, (double[3]){ 0, 0, w }, (double[3]){ w, 0, 0 }, 1,
+    geom_grid(&g, (double[3]){x0, hgt, z0}, (double[3]){0, 0, w}, (double[3]){w, 0, 0}, 1,
               1); /* top */
-    geom_grid(&g, (double[3]){ x0, 0, z0 }, (double[3]){ w, 0, 0 }, (double[3]){ 0, 0, w }, 1,
+    geom_grid(&g, (double[3]){x0, 0, z0}, (double[3]){w, 0, 0}, (double[3]){0, 0, w}, 1,
               1); /* bottom */
 
     for (size_t i = 0; i < g.vert_count; i++) {
@@ -371,8 +402,8 @@ static void build_column(struct demo *d, struct prim *p, struct anim_ids *ids)
     }
     add_prim(d, &p[MESH_COLUMN], "BendingColumn", &g, MAT_COLUMN);
     p[MESH_COLUMN].joints = add_joints(d, (const uint8_t(*)[4])joints, g.vert_count);
-    p[MESH_COLUMN].weights = add_floats(d, &weights[0][0], g.vert_count, "VEC4", GL_ARRAY_BUFFER,
-                                        0);
+    p[MESH_COLUMN].weights =
+        add_floats(d, &weights[0][0], g.vert_count, "VEC4", GL_ARRAY_BUFFER, 0);
 
     /* Column-major inverse bind matrices: pure translations by minus the joint positions. */
     float ibm[2][16];
@@ -387,7 +418,7 @@ static void build_column(struct demo *d, struct prim *p, struct anim_ids *ids)
     ids->ibm = add_floats(d, &ibm[0][0], 2, "MAT4", 0, 0);
 
     /* ColumnTip about +Z: 0, +30, 0, -30, 0 degrees at 0..4 s. */
-    static const double deg[5] = { 0, 30, 0, -30, 0 };
+    static const double deg[5] = {0, 30, 0, -30, 0};
     float t5[5], q5[5][4];
     for (int k = 0; k < 5; k++) {
         double half = deg[k] * PI / 360.0;
@@ -452,16 +483,16 @@ static void write_materials(FILE *f)
         double base[3], roughness;
         int is_emissive;
     } m[MAT_COUNT] = {
-        [MAT_WHITE] = { "White", { 0.73, 0.73, 0.73 }, 0.9, 0 },
-        [MAT_RED] = { "Red", { 0.65, 0.05, 0.05 }, 0.9, 0 },
-        [MAT_GREEN] = { "Green", { 0.12, 0.45, 0.15 }, 0.9, 0 },
-        [MAT_PANEL] = { "LightPanel", { 0.73, 0.73, 0.73 }, 0.9, 1 },
-        [MAT_BOX] = { "SpinningBox", { 0.8, 0.6, 0.2 }, 0.5, 0 },
-        [MAT_COLUMN] = { "BendingColumn", { 0.2, 0.35, 0.8 }, 0.35, 0 },
+        [MAT_WHITE] = {"White", {0.73, 0.73, 0.73}, 0.9, 0},
+        [MAT_RED] = {"Red", {0.65, 0.05, 0.05}, 0.9, 0},
+        [MAT_GREEN] = {"Green", {0.12, 0.45, 0.15}, 0.9, 0},
+        [MAT_PANEL] = {"LightPanel", {0.73, 0.73, 0.73}, 0.9, 1},
+        [MAT_BOX] = {"SpinningBox", {0.8, 0.6, 0.2}, 0.5, 0},
+        [MAT_COLUMN] = {"BendingColumn", {0.2, 0.35, 0.8}, 0.35, 0},
     };
     fputs("  \"materials\": [\n", f);
     for (int i = 0; i < MAT_COUNT; i++) {
-        double base[4] = { m[i].base[0], m[i].base[1], m[i].base[2], 1.0 };
+        double base[4] = {m[i].base[0], m[i].base[1], m[i].base[2], 1.0};
         fprintf(f, "    {\"name\": \"%s\", \"pbrMetallicRoughness\": {\"baseColorFactor\": ",
                 m[i].name);
         json_vec(f, base, 4);
@@ -479,8 +510,9 @@ static void write_meshes(FILE *f, const struct prim *p)
 {
     fputs("  \"meshes\": [\n", f);
     for (int i = 0; i < MESH_COUNT; i++) {
-        fprintf(f, "    {\"name\": \"%s\", \"primitives\": [{\"attributes\": {\"POSITION\": %d, "
-                   "\"NORMAL\": %d",
+        fprintf(f,
+                "    {\"name\": \"%s\", \"primitives\": [{\"attributes\": {\"POSITION\": %d, "
+                "\"NORMAL\": %d",
                 p[i].name, p[i].position, p[i].normal);
         if (p[i].joints >= 0)
             fprintf(f, ", \"JOINTS_0\": %d, \"WEIGHTS_0\": %d", p[i].joints, p[i].weights);
@@ -492,13 +524,13 @@ static void write_meshes(FILE *f, const struct prim *p)
 
 static void write_nodes(FILE *f)
 {
-    const double light_pos[3] = { 0, 1.8, 0 }, tip_pos[3] = { 0, column_tip_y, 0 };
-    const double camera_pos[3] = { 0, 1, 3.6 };
+    const double light_pos[3] = {0, 1.8, 0}, tip_pos[3] = {0, column_tip_y, 0};
+    const double camera_pos[3] = {0, 1, 3.6};
 
     fputs("  \"nodes\": [\n", f);
     /* Static meshes: walls and the light panel, mesh i on node i. */
-    static const char *const names[] = { "Floor", "Ceiling", "BackWall", "LeftWall", "RightWall",
-                                         "LightPanel" };
+    static const char *const names[] = {"Floor",    "Ceiling",   "BackWall",
+                                        "LeftWall", "RightWall", "LightPanel"};
     for (int i = NODE_FLOOR; i <= NODE_PANEL; i++)
         fprintf(f, "    {\"name\": \"%s\", \"mesh\": %d},\n", names[i], i);
 
@@ -513,8 +545,8 @@ static void write_nodes(FILE *f)
     /* Skinned mesh: root-level, identity transform (glTF ignores it anyway). */
     fprintf(f, "    {\"name\": \"BendingColumn\", \"mesh\": %d, \"skin\": 0},\n", MESH_COLUMN);
 
-    fprintf(f, "    {\"name\": \"ColumnRoot\", \"children\": [%d], \"translation\": ",
-            NODE_COLUMN_TIP);
+    fprintf(
+        f, "    {\"name\": \"ColumnRoot\", \"children\": [%d], \"translation\": ", NODE_COLUMN_TIP);
     json_vec(f, column_pos, 3);
     fputs("},\n", f);
     fputs("    {\"name\": \"ColumnTip\", \"translation\": ", f);
@@ -533,16 +565,16 @@ static void write_animation(FILE *f, const struct anim_ids *a)
         int input, output, node;
         const char *path;
     } ch[] = {
-        { a->box_rot_t, a->box_rot_q, NODE_BOX, "rotation" },
-        { a->box_bob_t, a->box_bob_p, NODE_BOX, "translation" },
-        { a->tip_t, a->tip_q, NODE_COLUMN_TIP, "rotation" },
+        {a->box_rot_t, a->box_rot_q, NODE_BOX, "rotation"},
+        {a->box_bob_t, a->box_bob_p, NODE_BOX, "translation"},
+        {a->tip_t, a->tip_q, NODE_COLUMN_TIP, "rotation"},
     };
     const int n = (int)(sizeof(ch) / sizeof(ch[0]));
 
     fputs("  \"animations\": [\n    {\n      \"name\": \"Demo\",\n      \"channels\": [\n", f);
     for (int i = 0; i < n; i++)
-        fprintf(f, "        {\"sampler\": %d, \"target\": {\"node\": %d, \"path\": \"%s\"}}%s\n",
-                i, ch[i].node, ch[i].path, i + 1 < n ? "," : "");
+        fprintf(f, "        {\"sampler\": %d, \"target\": {\"node\": %d, \"path\": \"%s\"}}%s\n", i,
+                ch[i].node, ch[i].path, i + 1 < n ? "," : "");
     fputs("      ],\n      \"samplers\": [\n", f);
     for (int i = 0; i < n; i++)
         fprintf(f, "        {\"input\": %d, \"output\": %d, \"interpolation\": \"LINEAR\"}%s\n",
@@ -573,8 +605,9 @@ static void write_gltf(FILE *f, const struct demo *d, const struct prim *p,
     fputs("  \"cameras\": [{\"name\": \"Camera\", \"type\": \"perspective\", \"perspective\": "
           "{\"yfov\": 0.7, \"znear\": 0.05, \"zfar\": 20}}],\n",
           f);
-    fprintf(f, "  \"skins\": [{\"name\": \"ColumnSkin\", \"inverseBindMatrices\": %d, "
-               "\"skeleton\": %d, \"joints\": [%d, %d]}],\n",
+    fprintf(f,
+            "  \"skins\": [{\"name\": \"ColumnSkin\", \"inverseBindMatrices\": %d, "
+            "\"skeleton\": %d, \"joints\": [%d, %d]}],\n",
             a->ibm, NODE_COLUMN_ROOT, NODE_COLUMN_ROOT, NODE_COLUMN_TIP);
     write_animation(f, a);
     write_materials(f);
@@ -614,7 +647,7 @@ int main(int argc, char **argv)
         fputs("usage: mkdemo OUTDIR\n"
               "Writes OUTDIR/room.gltf and OUTDIR/room.bin, raybundle's animated demo scene.\n",
               argc == 2 && (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) ? stdout
-                                                                                    : stderr);
+                                                                                  : stderr);
         return argc == 2 && (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) ? 0 : 2;
     }
 

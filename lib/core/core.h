@@ -20,10 +20,10 @@ extern "C" {
 
 enum rb_status {
     RB_OK = 0,
-    RB_E_INVALID,     /* bad argument or bad input data */
+    RB_E_INVALID, /* bad argument or bad input data */
     RB_E_NOMEM,
     RB_E_IO,
-    RB_E_PARSE,       /* a job file or scene that does not parse */
+    RB_E_PARSE, /* a job file or scene that does not parse */
     RB_E_VULKAN,
     RB_E_NODEVICE,    /* no usable Vulkan device */
     RB_E_UNSUPPORTED, /* valid input using something raybundle does not implement */
@@ -38,7 +38,13 @@ struct rb_err {
     char msg[512];
 };
 
-#define RB_ERR_INIT {RB_OK, {0}}
+#define RB_ERR_INIT                                                                                \
+    {                                                                                              \
+        RB_OK,                                                                                     \
+        {                                                                                          \
+            0                                                                                      \
+        }                                                                                          \
+    }
 
 /* Stores a formatted message in err (which may be NULL) and returns code. */
 enum rb_status rb_errf(struct rb_err *err, enum rb_status code, const char *fmt, ...)

@@ -100,9 +100,9 @@ enum rb_status rb_gpu_pass_times(struct rb_gpu *gpu, double *out_ms, struct rb_e
     uint64_t ts[2 * RB_GPU_MAX_PASSES];
     if (gpu->pass_count == 0)
         return RB_OK;
-    VkResult vr = vkGetQueryPoolResults(gpu->device, gpu->queries, 0, 2 * gpu->pass_count,
-                                        sizeof(ts), ts, sizeof(uint64_t),
-                                        VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT);
+    VkResult vr =
+        vkGetQueryPoolResults(gpu->device, gpu->queries, 0, 2 * gpu->pass_count, sizeof(ts), ts,
+                              sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT);
     if (vr < 0)
         return rb_gpu_fail(err, vr, "vkGetQueryPoolResults", "timestamps");
     for (uint32_t i = 0; i < gpu->pass_count; i++) {

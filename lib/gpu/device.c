@@ -16,7 +16,7 @@ static const char *const required_extensions[] = {
 const char *rb_gpu_result_name(VkResult vr)
 {
     switch (vr) {
-#define R(x) \
+#define R(x)                                                                                       \
     case x: return #x;
         R(VK_SUCCESS)
         R(VK_NOT_READY)
@@ -124,8 +124,8 @@ static void missing_requirements(VkPhysicalDevice phys, char *out, size_t size)
     VkPhysicalDeviceProperties props;
     vkGetPhysicalDeviceProperties(phys, &props);
     size_t len = 0;
-#define MISSING(...) \
-    (len += (size_t)snprintf(out + len, len < size ? size - len : 0, "%s", len ? ", " : ""), \
+#define MISSING(...)                                                                               \
+    (len += (size_t)snprintf(out + len, len < size ? size - len : 0, "%s", len ? ", " : ""),       \
      len += (size_t)snprintf(out + len, len < size ? size - len : 0, __VA_ARGS__))
     if (props.apiVersion < VK_API_VERSION_1_3)
         MISSING("Vulkan 1.3 (has %u.%u)", VK_API_VERSION_MAJOR(props.apiVersion),
@@ -208,8 +208,8 @@ static enum rb_status pick_device(VkInstance inst, const char *want, VkPhysicalD
     long index = want ? strtol(want, &end, 10) : -1;
     if (want && end && *end == '\0' && *want) {
         if (index < 0 || index >= (long)n)
-            st = rb_errf(err, RB_E_NODEVICE, "device index %ld out of range (%u devices)", index,
-                         n);
+            st =
+                rb_errf(err, RB_E_NODEVICE, "device index %ld out of range (%u devices)", index, n);
         chosen = (int)index;
     } else {
         for (uint32_t i = 0; i < n && chosen < 0; i++) {
@@ -219,8 +219,7 @@ static enum rb_status pick_device(VkInstance inst, const char *want, VkPhysicalD
                 chosen = (int)i;
         }
         if (chosen < 0 && want)
-            st = rb_errf(err, RB_E_NODEVICE, "no device matches '%s' (see 'raybundle info')",
-                         want);
+            st = rb_errf(err, RB_E_NODEVICE, "no device matches '%s' (see 'raybundle info')", want);
         if (chosen < 0 && !want) {
             rb_log(RB_LOG_WARN, "lavapipe not found; using device 0");
             chosen = 0;
@@ -320,8 +319,8 @@ enum rb_status rb_gpu_create(const struct rb_gpu_desc *desc, struct rb_gpu **out
     vkGetPhysicalDeviceQueueFamilyProperties(gpu->phys, &qn, qf);
     gpu->queue_family = UINT32_MAX;
     for (uint32_t i = 0; i < qn && gpu->queue_family == UINT32_MAX; i++)
-        if ((qf[i].queueFlags & VK_QUEUE_GRAPHICS_BIT) && (qf[i].queueFlags & VK_QUEUE_COMPUTE_BIT) &&
-            qf[i].timestampValidBits) {
+        if ((qf[i].queueFlags & VK_QUEUE_GRAPHICS_BIT) &&
+            (qf[i].queueFlags & VK_QUEUE_COMPUTE_BIT) && qf[i].timestampValidBits) {
             gpu->queue_family = i;
             gpu->timestamp_mask = qf[i].timestampValidBits >= 64
                                       ? UINT64_MAX
@@ -414,9 +413,8 @@ enum rb_status rb_gpu_create(const struct rb_gpu_desc *desc, struct rb_gpu **out
             .sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO,
             .magFilter = samplers[i].filter,
             .minFilter = samplers[i].filter,
-            .mipmapMode = samplers[i].filter == VK_FILTER_LINEAR
-                              ? VK_SAMPLER_MIPMAP_MODE_LINEAR
-                              : VK_SAMPLER_MIPMAP_MODE_NEAREST,
+            .mipmapMode = samplers[i].filter == VK_FILTER_LINEAR ? VK_SAMPLER_MIPMAP_MODE_LINEAR
+                                                                 : VK_SAMPLER_MIPMAP_MODE_NEAREST,
             .addressModeU = samplers[i].mode_u,
             .addressModeV = samplers[i].mode_v,
             .addressModeW = samplers[i].mode_v,

@@ -95,15 +95,15 @@ enum rb_status rb_gpu_buffer_init(struct rb_gpu *gpu, const struct rb_gpu_buffer
                                   struct rb_gpu_buffer *out, struct rb_err *err);
 void rb_gpu_buffer_release(struct rb_gpu *gpu, struct rb_gpu_buffer *buf);
 /* Copies data into a buffer (through a staging buffer when it is not host-visible). Waits. */
-enum rb_status rb_gpu_buffer_upload(struct rb_gpu *gpu, struct rb_gpu_buffer *buf,
-                                    const void *data, VkDeviceSize size, struct rb_err *err);
+enum rb_status rb_gpu_buffer_upload(struct rb_gpu *gpu, struct rb_gpu_buffer *buf, const void *data,
+                                    VkDeviceSize size, struct rb_err *err);
 
 /* ---- images -------------------------------------------------------------------------------- */
 
 struct rb_gpu_image {
     VkImage image;
     VkDeviceMemory memory;
-    VkImageView view;        /* all layers and mips (2D or 2D array view) */
+    VkImageView view;         /* all layers and mips (2D or 2D array view) */
     VkImageView *layer_views; /* one 2D view per layer, when desc asked for them */
     VkFormat format;
     uint32_t width_px, height_px, layer_count, mip_count;
@@ -157,8 +157,8 @@ struct rb_gpu_layout {
     VkDescriptorSetLayout set_layout;
     VkPipelineLayout pipeline_layout;
 };
-enum rb_status rb_gpu_layout_init(struct rb_gpu *gpu, const VkDescriptorType *types,
-                                  uint32_t count, uint32_t push_bytes, struct rb_gpu_layout *out,
+enum rb_status rb_gpu_layout_init(struct rb_gpu *gpu, const VkDescriptorType *types, uint32_t count,
+                                  uint32_t push_bytes, struct rb_gpu_layout *out,
                                   struct rb_err *err);
 void rb_gpu_layout_release(struct rb_gpu *gpu, struct rb_gpu_layout *layout);
 

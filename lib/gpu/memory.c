@@ -86,8 +86,8 @@ void rb_gpu_buffer_release(struct rb_gpu *gpu, struct rb_gpu_buffer *buf)
     *buf = (struct rb_gpu_buffer){0};
 }
 
-enum rb_status rb_gpu_buffer_upload(struct rb_gpu *gpu, struct rb_gpu_buffer *buf,
-                                    const void *data, VkDeviceSize size, struct rb_err *err)
+enum rb_status rb_gpu_buffer_upload(struct rb_gpu *gpu, struct rb_gpu_buffer *buf, const void *data,
+                                    VkDeviceSize size, struct rb_err *err)
 {
     if (size > buf->size)
         RB_BUG("upload of %llu bytes into a %llu-byte buffer", (unsigned long long)size,
@@ -99,13 +99,13 @@ enum rb_status rb_gpu_buffer_upload(struct rb_gpu *gpu, struct rb_gpu_buffer *bu
         return RB_OK;
     }
     struct rb_gpu_buffer staging = {0};
-    enum rb_status st = rb_gpu_buffer_init(
-        gpu,
-        &(struct rb_gpu_buffer_desc){.size_bytes = size,
-                                     .usage = VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                     .is_host_visible = true,
-                                     .debug_name = "staging"},
-        &staging, err);
+    enum rb_status st =
+        rb_gpu_buffer_init(gpu,
+                           &(struct rb_gpu_buffer_desc){.size_bytes = size,
+                                                        .usage = VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                                        .is_host_visible = true,
+                                                        .debug_name = "staging"},
+                           &staging, err);
     if (st)
         return st;
     memcpy(staging.mapped, data, size);

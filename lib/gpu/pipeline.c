@@ -16,8 +16,8 @@ static enum rb_status make_module(struct rb_gpu *gpu, const uint32_t *spv, size_
     return RB_OK;
 }
 
-enum rb_status rb_gpu_layout_init(struct rb_gpu *gpu, const VkDescriptorType *types,
-                                  uint32_t count, uint32_t push_bytes, struct rb_gpu_layout *out,
+enum rb_status rb_gpu_layout_init(struct rb_gpu *gpu, const VkDescriptorType *types, uint32_t count,
+                                  uint32_t push_bytes, struct rb_gpu_layout *out,
                                   struct rb_err *err)
 {
     VkDescriptorSetLayoutBinding bindings[16];
@@ -145,29 +145,27 @@ enum rb_status rb_gpu_graphics_pipeline(struct rb_gpu *gpu, const struct rb_gpu_
         .pAttachments = blend};
     VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR,
                             VK_DYNAMIC_STATE_DEPTH_BIAS};
-    VkPipelineDynamicStateCreateInfo dy = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
-        .dynamicStateCount = d->has_depth_bias ? 3 : 2,
-        .pDynamicStates = dyn};
-    VkPipelineRenderingCreateInfo ri = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO,
-        .colorAttachmentCount = d->color_count,
-        .pColorAttachmentFormats = d->color_formats,
-        .depthAttachmentFormat = d->depth_format};
-    VkGraphicsPipelineCreateInfo ci = {
-        .sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO,
-        .pNext = &ri,
-        .stageCount = 2,
-        .pStages = stages,
-        .pVertexInputState = &vi,
-        .pInputAssemblyState = &ia,
-        .pViewportState = &vp,
-        .pRasterizationState = &rs,
-        .pMultisampleState = &ms,
-        .pDepthStencilState = &ds,
-        .pColorBlendState = &cb,
-        .pDynamicState = &dy,
-        .layout = d->layout};
+    VkPipelineDynamicStateCreateInfo dy = {.sType =
+                                               VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
+                                           .dynamicStateCount = d->has_depth_bias ? 3 : 2,
+                                           .pDynamicStates = dyn};
+    VkPipelineRenderingCreateInfo ri = {.sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO,
+                                        .colorAttachmentCount = d->color_count,
+                                        .pColorAttachmentFormats = d->color_formats,
+                                        .depthAttachmentFormat = d->depth_format};
+    VkGraphicsPipelineCreateInfo ci = {.sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO,
+                                       .pNext = &ri,
+                                       .stageCount = 2,
+                                       .pStages = stages,
+                                       .pVertexInputState = &vi,
+                                       .pInputAssemblyState = &ia,
+                                       .pViewportState = &vp,
+                                       .pRasterizationState = &rs,
+                                       .pMultisampleState = &ms,
+                                       .pDepthStencilState = &ds,
+                                       .pColorBlendState = &cb,
+                                       .pDynamicState = &dy,
+                                       .layout = d->layout};
     VkResult vr = vkCreateGraphicsPipelines(gpu->device, VK_NULL_HANDLE, 1, &ci, NULL, out);
     if (vr < 0)
         st = rb_gpu_fail(err, vr, "vkCreateGraphicsPipelines", d->debug_name);

@@ -14,9 +14,9 @@ static uint32_t shadow_layers_for(enum rb_light_type t)
     return t == RB_LIGHT_POINT ? 6 : 1;
 }
 
-static enum rb_status make_buffer(struct rb_gpu *gpu, VkDeviceSize size,
-                                  VkBufferUsageFlags usage, bool host, const char *name,
-                                  struct rb_gpu_buffer *out, struct rb_err *err)
+static enum rb_status make_buffer(struct rb_gpu *gpu, VkDeviceSize size, VkBufferUsageFlags usage,
+                                  bool host, const char *name, struct rb_gpu_buffer *out,
+                                  struct rb_err *err)
 {
     return rb_gpu_buffer_init(gpu,
                               &(struct rb_gpu_buffer_desc){.size_bytes = size ? size : 16,
@@ -101,8 +101,8 @@ static enum rb_status upload_texture_layer(struct rb_gpu *gpu, const struct rb_s
         .imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
         .imageExtent = {tex->width_px, tex->height_px, 1},
     };
-    vkCmdCopyBufferToImage(cmd, staging.buffer, src.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                           1, &copy);
+    vkCmdCopyBufferToImage(cmd, staging.buffer, src.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
+                           &copy);
     blit_barrier(cmd, src.image, 0, 0, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
                  VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
     int32_t w = (int32_t)tex->width_px, h = (int32_t)tex->height_px;
@@ -169,19 +169,19 @@ static enum rb_status upload_textures(struct rb_gpu *gpu, const struct rb_scene 
     struct rb_scene_texture fallback = {
         .name = "white", .width_px = 1, .height_px = 1, .rgba8 = (uint8_t *)white};
     for (int a = 0; a < 2; a++) {
-        enum rb_status st = rb_gpu_image_init(
-            gpu,
-            &(struct rb_gpu_image_desc){.width_px = size,
-                                        .height_px = size,
-                                        .layer_count = layers,
-                                        .mip_count = mips,
-                                        .format = arrays[a].format,
-                                        .usage = VK_IMAGE_USAGE_SAMPLED_BIT |
-                                                 VK_IMAGE_USAGE_TRANSFER_DST_BIT |
-                                                 VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                                        .is_array = true,
-                                        .debug_name = arrays[a].name},
-            arrays[a].img, err);
+        enum rb_status st =
+            rb_gpu_image_init(gpu,
+                              &(struct rb_gpu_image_desc){.width_px = size,
+                                                          .height_px = size,
+                                                          .layer_count = layers,
+                                                          .mip_count = mips,
+                                                          .format = arrays[a].format,
+                                                          .usage = VK_IMAGE_USAGE_SAMPLED_BIT |
+                                                                   VK_IMAGE_USAGE_TRANSFER_DST_BIT |
+                                                                   VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                                                          .is_array = true,
+                                                          .debug_name = arrays[a].name},
+                              arrays[a].img, err);
         if (st)
             return st;
         for (uint32_t l = 0; l < layers; l++) {
@@ -204,8 +204,8 @@ static int tex_layer(uint32_t index)
 static enum rb_status upload_materials(struct rb_gpu *gpu, const struct rb_scene *scene,
                                        struct rb_frame *frame, struct rb_err *err)
 {
-    struct rb_gpu_material *m = calloc(scene->material_count ? scene->material_count : 1,
-                                       sizeof(*m));
+    struct rb_gpu_material *m =
+        calloc(scene->material_count ? scene->material_count : 1, sizeof(*m));
     if (!m)
         return rb_errf(err, RB_E_NOMEM, "out of memory");
     for (uint32_t i = 0; i < scene->material_count; i++) {
@@ -228,9 +228,9 @@ static enum rb_status upload_materials(struct rb_gpu *gpu, const struct rb_scene
         m[i].textures[2] = tex_layer(s->normal_tex);
         m[i].textures[3] = tex_layer(s->emissive_tex);
     }
-    enum rb_status st = upload_buffer(gpu, m, sizeof(*m) * scene->material_count,
-                                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "materials",
-                                      &frame->materials, err);
+    enum rb_status st =
+        upload_buffer(gpu, m, sizeof(*m) * scene->material_count,
+                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "materials", &frame->materials, err);
     free(m);
     return st;
 }
@@ -264,9 +264,9 @@ static enum rb_status upload_geometry(struct rb_gpu *gpu, const struct rb_scene 
     frame->vertex_count = (uint32_t)vcount;
     frame->index_count = (uint32_t)icount;
     frame->instance_count = pose->instance_count;
-    enum rb_status st = upload_buffer(gpu, indices, icount * sizeof(uint32_t),
-                                      VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "indices",
-                                      &frame->indices, err);
+    enum rb_status st =
+        upload_buffer(gpu, indices, icount * sizeof(uint32_t), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+                      "indices", &frame->indices, err);
     free(indices);
     if (st == RB_OK)
         st = upload_buffer(gpu, scene->vertices,
@@ -274,20 +274,19 @@ static enum rb_status upload_geometry(struct rb_gpu *gpu, const struct rb_scene 
                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "vertices.source",
                            &frame->src_vertices, err);
     if (st == RB_OK)
-        st = upload_buffer(gpu, scene->morph_deltas,
-                           (VkDeviceSize)scene->morph_delta_count *
-                               sizeof(struct rb_scene_morph_delta),
-                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "morph.deltas",
-                           &frame->morph_deltas, err);
+        st = upload_buffer(
+            gpu, scene->morph_deltas,
+            (VkDeviceSize)scene->morph_delta_count * sizeof(struct rb_scene_morph_delta),
+            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "morph.deltas", &frame->morph_deltas, err);
     for (int s = 0; s < 2 && st == RB_OK; s++) {
         struct rb_frame_slot *slot = &frame->slots[s];
         st = make_buffer(gpu, (VkDeviceSize)pose->instance_count * sizeof(struct rb_gpu_instance),
                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "instances", &slot->instances,
                          err);
         if (st == RB_OK)
-            st = make_buffer(gpu, (VkDeviceSize)pose->joint_matrix_count * 64,
-                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "joints", &slot->joints,
-                             err);
+            st =
+                make_buffer(gpu, (VkDeviceSize)pose->joint_matrix_count * 64,
+                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "joints", &slot->joints, err);
         if (st == RB_OK)
             st = make_buffer(gpu, (VkDeviceSize)pose->morph_weight_count * sizeof(float),
                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "weights", &slot->weights,
@@ -323,10 +322,9 @@ static enum rb_status upload_env(struct rb_gpu *gpu, const struct rb_integrator_
     const float *px = desc->env_rgba ? desc->env_rgba : black;
     uint32_t w = desc->env_rgba ? desc->env_width_px : 1;
     uint32_t h = desc->env_rgba ? desc->env_height_px : 1;
-    enum rb_status st = make_image(
-        gpu, w, h, 1, VK_FORMAT_R32G32B32A32_SFLOAT,
-        VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, false, "environment",
-        &frame->env_map, err);
+    enum rb_status st = make_image(gpu, w, h, 1, VK_FORMAT_R32G32B32A32_SFLOAT,
+                                   VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                   false, "environment", &frame->env_map, err);
     if (st)
         return st;
     struct rb_gpu_buffer staging = {0};
@@ -366,9 +364,9 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
     frame->width_px = w;
     frame->height_px = h;
 
-    enum rb_status st = make_buffer(gpu, sizeof(struct rb_gpu_globals),
-                                    VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "globals",
-                                    &frame->globals, err);
+    enum rb_status st =
+        make_buffer(gpu, sizeof(struct rb_gpu_globals), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true,
+                    "globals", &frame->globals, err);
     if (st == RB_OK)
         st = upload_geometry(gpu, scene, first->pose, frame, err);
     if (st == RB_OK)
@@ -385,8 +383,9 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
     for (uint32_t i = 0; i < first->light_count; i++) {
         uint32_t need = shadow_layers_for(first->lights[i].type);
         if (frame->shadow_layer_count + need > RB_MAX_SHADOW_LAYERS) {
-            rb_log(RB_LOG_WARN, "light %u and later lights cast no shadows: more than %d "
-                                "shadow-map layers would be needed",
+            rb_log(RB_LOG_WARN,
+                   "light %u and later lights cast no shadows: more than %d "
+                   "shadow-map layers would be needed",
                    i, RB_MAX_SHADOW_LAYERS);
             break;
         }
@@ -527,8 +526,7 @@ void rb_frame_write_slot(struct rb_frame *frame, const struct rb_scene *scene,
         memcpy(slot->joints.mapped, pose->joint_matrices,
                sizeof(struct rb_mat4) * pose->joint_matrix_count);
     if (pose->morph_weight_count)
-        memcpy(slot->weights.mapped, pose->morph_weights,
-               sizeof(float) * pose->morph_weight_count);
+        memcpy(slot->weights.mapped, pose->morph_weights, sizeof(float) * pose->morph_weight_count);
     frame->instances = out;
 }
 
@@ -552,20 +550,18 @@ static uint32_t write_shadow_views(const struct rb_world_light *l, const struct 
         struct rb_vec3 d = rb_v3_normalize(l->direction);
         struct rb_vec3 origin = rb_v3_sub(center, rb_v3_scale(d, radius * 1.05f));
         struct rb_mat4 view = rb_mat4_look_at(origin, center, rb_v3(0, 1, 0));
-        struct rb_mat4 proj = rb_mat4_ortho(-radius, radius, -radius, radius, 0.0f,
-                                            radius * 2.1f);
+        struct rb_mat4 proj = rb_mat4_ortho(-radius, radius, -radius, radius, 0.0f, radius * 2.1f);
         struct rb_mat4 vp = rb_mat4_mul(&proj, &view);
         mat_store(out[0].view_proj, &vp);
-        memcpy(out[0].light, (float[4]){origin.x, origin.y, origin.z, RB_KIND_DIRECTIONAL},
-               16);
+        memcpy(out[0].light, (float[4]){origin.x, origin.y, origin.z, RB_KIND_DIRECTIONAL}, 16);
         memcpy(out[0].axis, (float[4]){d.x, d.y, d.z, 2.0f * radius / (float)size}, 16);
         return 1;
     }
     /* far: the farthest corner of the bounds; near: small against the scene, never zero */
     float far = 0.0f;
     for (int c = 0; c < 8; c++) {
-        struct rb_vec3 corner = rb_v3(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y,
-                                      c & 4 ? hi.z : lo.z);
+        struct rb_vec3 corner =
+            rb_v3(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z);
         float dist = rb_v3_length(rb_v3_sub(corner, l->position));
         if (dist > far)
             far = dist;
@@ -582,10 +578,9 @@ static uint32_t write_shadow_views(const struct rb_world_light *l, const struct 
         struct rb_mat4 proj = rb_mat4_perspective(fov, 1.0f, near, far);
         struct rb_mat4 vp = rb_mat4_mul(&proj, &view);
         mat_store(out[0].view_proj, &vp);
-        memcpy(out[0].light,
-               (float[4]){l->position.x, l->position.y, l->position.z, RB_KIND_SPOT}, 16);
-        memcpy(out[0].axis, (float[4]){d.x, d.y, d.z, 2.0f * tanf(fov * 0.5f) / (float)size},
+        memcpy(out[0].light, (float[4]){l->position.x, l->position.y, l->position.z, RB_KIND_SPOT},
                16);
+        memcpy(out[0].axis, (float[4]){d.x, d.y, d.z, 2.0f * tanf(fov * 0.5f) / (float)size}, 16);
         return 1;
     }
     static const float dirs[6][3] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
@@ -599,8 +594,8 @@ static uint32_t write_shadow_views(const struct rb_world_light *l, const struct 
                                               rb_v3(ups[f][0], ups[f][1], ups[f][2]));
         struct rb_mat4 vp = rb_mat4_mul(&proj, &view);
         mat_store(out[f].view_proj, &vp);
-        memcpy(out[f].light,
-               (float[4]){l->position.x, l->position.y, l->position.z, RB_KIND_POINT}, 16);
+        memcpy(out[f].light, (float[4]){l->position.x, l->position.y, l->position.z, RB_KIND_POINT},
+               16);
         memcpy(out[f].axis, (float[4]){d.x, d.y, d.z, 2.0f / (float)size}, 16);
     }
     return 6;
@@ -645,14 +640,12 @@ void rb_frame_write_globals(struct rb_frame *frame, const struct rb_job *job, in
         const struct rb_world_light *l = &cur->lights[i];
         struct rb_gpu_light *o = &lights[i];
         bool shadowed = layer + shadow_layers_for(l->type) <= frame->shadow_layer_count;
-        memcpy(o->position, (float[4]){l->position.x, l->position.y, l->position.z,
-                                       (float)l->type},
+        memcpy(o->position, (float[4]){l->position.x, l->position.y, l->position.z, (float)l->type},
                16);
-        memcpy(o->direction, (float[4]){l->direction.x, l->direction.y, l->direction.z,
-                                        l->range},
+        memcpy(o->direction, (float[4]){l->direction.x, l->direction.y, l->direction.z, l->range},
                16);
-        memcpy(o->color, (float[4]){l->color[0], l->color[1], l->color[2],
-                                    shadowed ? (float)layer : -1.0f},
+        memcpy(o->color,
+               (float[4]){l->color[0], l->color[1], l->color[2], shadowed ? (float)layer : -1.0f},
                16);
         o->cone[0] = cosf(l->inner_cone_rad);
         o->cone[1] = cosf(l->outer_cone_rad);

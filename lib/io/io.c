@@ -68,14 +68,14 @@ enum rb_status rb_io_frame_path(const char *pattern, int frame, char *out, size_
     }
     if (n < 0 || (size_t)n >= size) {
         out[0] = '\0';
-        return rb_errf(err, RB_E_OVERFLOW, "frame path for '%s' is longer than %zu bytes",
-                       pattern, size - 1);
+        return rb_errf(err, RB_E_OVERFLOW, "frame path for '%s' is longer than %zu bytes", pattern,
+                       size - 1);
     }
     return RB_OK;
 }
 
-enum rb_status rb_io_sidecar_path(const char *exr_path, const char *suffix, char *out,
-                                  size_t size, struct rb_err *err)
+enum rb_status rb_io_sidecar_path(const char *exr_path, const char *suffix, char *out, size_t size,
+                                  struct rb_err *err)
 {
     if (!exr_path || !*exr_path)
         return rb_errf(err, RB_E_INVALID, "sidecar path: empty image path");
@@ -279,8 +279,8 @@ enum rb_status rb_io_exr_write(const char *path, uint32_t width_px, uint32_t hei
         const struct rb_io_layer *l = &layers[i];
         const char *ln = is_beauty(l) ? "beauty" : l->name;
         if (l->channel_count < 1 || l->channel_count > 4)
-            return rb_errf(err, RB_E_INVALID, "exr '%s': layer '%s' has %u channels (1..4)",
-                           path, ln, l->channel_count);
+            return rb_errf(err, RB_E_INVALID, "exr '%s': layer '%s' has %u channels (1..4)", path,
+                           ln, l->channel_count);
         if (!l->pixels)
             return rb_errf(err, RB_E_INVALID, "exr '%s': layer '%s' has no pixels", path, ln);
         if (!l->channel_names && !is_beauty(l))
@@ -333,8 +333,8 @@ enum rb_status rb_io_exr_write(const char *path, uint32_t width_px, uint32_t hei
                 snprintf(names[ch], n, "%s.%s", l->name, cn);
             for (uint32_t j = 0; j < ch; j++)
                 if (!strcmp(names[j], names[ch])) {
-                    st = rb_errf(err, RB_E_INVALID, "exr '%s': channel '%s' appears twice",
-                                 path, names[ch]);
+                    st = rb_errf(err, RB_E_INVALID, "exr '%s': channel '%s' appears twice", path,
+                                 names[ch]);
                     goto out;
                 }
             is_half[ch] = l->is_half;
@@ -347,14 +347,16 @@ enum rb_status rb_io_exr_write(const char *path, uint32_t width_px, uint32_t hei
     /* Our metadata first; a caller's attribute of the same name replaces it. Nothing here
      * depends on the time or the host, so equal pixels give equal bytes. */
     size_t na = 0;
-    oattrs[na++] = (struct rb_oiio_attr){.name = "compression", .type = RB_OIIO_ATTR_STRING,
-                                         .s = "zip"};
-    oattrs[na++] = (struct rb_oiio_attr){.name = "oiio:ColorSpace", .type = RB_OIIO_ATTR_STRING,
-                                         .s = "Linear"};
-    oattrs[na++] = (struct rb_oiio_attr){.name = "chromaticities", .type = RB_OIIO_ATTR_FLOATS,
-                                         .fv = rec709_chromaticities, .fv_count = 8};
-    oattrs[na++] = (struct rb_oiio_attr){.name = "software", .type = RB_OIIO_ATTR_STRING,
-                                         .s = "raybundle " RB_VERSION};
+    oattrs[na++] =
+        (struct rb_oiio_attr){.name = "compression", .type = RB_OIIO_ATTR_STRING, .s = "zip"};
+    oattrs[na++] = (struct rb_oiio_attr){
+        .name = "oiio:ColorSpace", .type = RB_OIIO_ATTR_STRING, .s = "Linear"};
+    oattrs[na++] = (struct rb_oiio_attr){.name = "chromaticities",
+                                         .type = RB_OIIO_ATTR_FLOATS,
+                                         .fv = rec709_chromaticities,
+                                         .fv_count = 8};
+    oattrs[na++] = (struct rb_oiio_attr){
+        .name = "software", .type = RB_OIIO_ATTR_STRING, .s = "raybundle " RB_VERSION};
     /* OIIO stamps the current time as EXR "capDate" unless the spec has a DateTime. An int
      * DateTime counts as present, yet OIIO's EXR writer drops it (capDate must be a string),
      * so the header gets no date at all. test_io checks the header for capDate. */
@@ -391,8 +393,8 @@ enum rb_status rb_io_exr_write(const char *path, uint32_t width_px, uint32_t hei
             o->fv_count = 16;
             break;
         default:
-            st = rb_errf(err, RB_E_INVALID, "exr '%s': attribute '%s' has unknown type %d",
-                         path, a->name, (int)a->type);
+            st = rb_errf(err, RB_E_INVALID, "exr '%s': attribute '%s' has unknown type %d", path,
+                         a->name, (int)a->type);
             goto out;
         }
     }
@@ -438,8 +440,7 @@ enum rb_status rb_io_image_read(const char *path, struct rb_io_image *out, struc
     if (rb_oiio_input_open(path, &in, &info, msg, sizeof(msg)) != RB_OIIO_OK)
         return rb_errf(err, RB_E_EXTERNAL, "cannot read '%s': %s", path, msg);
 
-    size_t bytes = mul3((size_t)info.width_px * info.height_px, info.channel_count,
-                        sizeof(float));
+    size_t bytes = mul3((size_t)info.width_px * info.height_px, info.channel_count, sizeof(float));
     if (!bytes) {
         st = rb_errf(err, RB_E_INVALID, "cannot read '%s': image too large", path);
         goto out;
@@ -588,11 +589,9 @@ enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t
     }
     struct stat sb;
     if (stat(config, &sb) != 0)
-        return rb_errf(err, RB_E_IO, "ocio: cannot read config '%s': %s", config,
-                       strerror(errno));
+        return rb_errf(err, RB_E_IO, "ocio: cannot read config '%s': %s", config, strerror(errno));
     if (!S_ISREG(sb.st_mode))
-        return rb_errf(err, RB_E_IO, "ocio: cannot read config '%s': not a regular file",
-                       config);
+        return rb_errf(err, RB_E_IO, "ocio: cannot read config '%s': not a regular file", config);
 
     size_t count = (size_t)width_px * height_px;
     size_t fbytes = mul3(count, 4, sizeof(float));
@@ -614,9 +613,9 @@ enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t
                 work[p * 4 + c] /= a;
     }
 
-    int r = rb_ocio_display_view_apply(config, desc ? desc->display : NULL,
-                                       desc ? desc->view : NULL, work, width_px, height_px, NULL,
-                                       NULL, 0, msg, sizeof(msg));
+    int r =
+        rb_ocio_display_view_apply(config, desc ? desc->display : NULL, desc ? desc->view : NULL,
+                                   work, width_px, height_px, NULL, NULL, 0, msg, sizeof(msg));
     if (r != RB_OCIO_OK) {
         st = rb_errf(err, r == RB_OCIO_NO_NAME ? RB_E_INVALID : RB_E_EXTERNAL, "%s", msg);
         goto out;
@@ -683,8 +682,7 @@ static void text_puts(struct text *t, const char *s)
     text_add(t, s, strlen(s));
 }
 
-__attribute__((format(printf, 2, 3))) static void text_printf(struct text *t, const char *fmt,
-                                                              ...)
+__attribute__((format(printf, 2, 3))) static void text_printf(struct text *t, const char *fmt, ...)
 {
     char buf[128];
     va_list ap;

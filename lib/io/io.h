@@ -14,8 +14,8 @@ enum rb_status rb_io_frame_path(const char *pattern, int frame, char *out, size_
                                 struct rb_err *err);
 
 /* The sidecar beside an EXR: "a/shot.0012.exr" + ".timing.json" -> "a/shot.0012.timing.json". */
-enum rb_status rb_io_sidecar_path(const char *exr_path, const char *suffix, char *out,
-                                  size_t size, struct rb_err *err);
+enum rb_status rb_io_sidecar_path(const char *exr_path, const char *suffix, char *out, size_t size,
+                                  struct rb_err *err);
 
 /* Creates every missing directory leading to path's file (like mkdir -p of its dirname). */
 enum rb_status rb_io_make_parent_dirs(const char *path, struct rb_err *err);
@@ -34,7 +34,7 @@ struct rb_io_layer {
     uint32_t channel_count;           /* 1..4 */
     const char *const *channel_names; /* e.g. {"X","Y","Z"} */
     const float *pixels;
-    bool is_half;                     /* store as half instead of float */
+    bool is_half; /* store as half instead of float */
 };
 
 /* One string, int, float or matrix attribute of the EXR header. */

@@ -12,7 +12,8 @@
 
 namespace OCIO = OCIO_NAMESPACE;
 
-namespace {
+namespace
+{
 
 int fail(char *msg, size_t msg_size, const std::string &text, int code = RB_OCIO_FAIL)
 {
@@ -72,8 +73,8 @@ extern "C" int rb_ocio_display_view_apply(const char *config_path, const char *d
             found = disp == config->getDisplay(i);
         if (!found)
             return fail(msg, msg_size,
-                        "ocio: display '" + disp + "' not found in " + where + " (has: " +
-                            join_displays(config) + ")",
+                        "ocio: display '" + disp + "' not found in " + where +
+                            " (has: " + join_displays(config) + ")",
                         RB_OCIO_NO_NAME);
 
         std::string v = is_set(view) ? view : config->getDefaultView(disp.c_str());
@@ -82,8 +83,8 @@ extern "C" int rb_ocio_display_view_apply(const char *config_path, const char *d
             found = v == config->getView(disp.c_str(), i);
         if (!found)
             return fail(msg, msg_size,
-                        "ocio: view '" + v + "' not found for display '" + disp + "' in " +
-                            where + " (has: " + join_views(config, disp.c_str()) + ")",
+                        "ocio: view '" + v + "' not found for display '" + disp + "' in " + where +
+                            " (has: " + join_views(config, disp.c_str()) + ")",
                         RB_OCIO_NO_NAME);
 
         OCIO::DisplayViewTransformRcPtr t = OCIO::DisplayViewTransform::Create();

@@ -14,7 +14,8 @@
 #include <string>
 #include <vector>
 
-namespace {
+namespace
+{
 
 int fail(char *msg, size_t msg_size, const std::string &text)
 {
@@ -63,8 +64,8 @@ extern "C" int rb_oiio_write(const struct rb_oiio_write_desc *d, char *msg,
         if (!out)
             return fail(msg, msg_size, OIIO::geterror());
 
-        const OIIO::TypeDesc pixel_type = d->is_uint8 ? OIIO::TypeDesc::UINT8
-                                                      : OIIO::TypeDesc::FLOAT;
+        const OIIO::TypeDesc pixel_type =
+            d->is_uint8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT;
         OIIO::ImageSpec spec(int(d->width_px), int(d->height_px), int(d->channel_count),
                              pixel_type);
         spec.channelnames.clear();

@@ -70,8 +70,7 @@ struct rb_oiio_info {
 int rb_oiio_input_open(const char *path, struct rb_oiio_input **out, struct rb_oiio_info *info,
                        char *msg, size_t msg_size) RB_SHIM_NOEXCEPT;
 /* The name of channel i as stored in the file; valid until rb_oiio_input_close. */
-const char *rb_oiio_input_channel_name(const struct rb_oiio_input *in,
-                                       uint32_t i) RB_SHIM_NOEXCEPT;
+const char *rb_oiio_input_channel_name(const struct rb_oiio_input *in, uint32_t i) RB_SHIM_NOEXCEPT;
 /* Reads every pixel of every channel as float into pixels (width*height*channels floats). */
 int rb_oiio_input_read(struct rb_oiio_input *in, float *pixels, char *msg,
                        size_t msg_size) RB_SHIM_NOEXCEPT;

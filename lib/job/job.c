@@ -47,11 +47,11 @@ typedef enum rb_status (*item_check_fn)(struct ctx *c, void *items, size_t i, co
                                         const struct mark *marks, const struct mark *item_mark);
 
 struct key {
-    const char *path;   /* dotted; "lights[].type" is a key of every item of "lights" */
+    const char *path; /* dotted; "lights[].type" is a key of every item of "lights" */
     enum key_type type;
-    size_t offset;      /* into struct rb_job, or into the item struct for "x[]." rows */
-    double min, max;    /* inclusive unless KF_*_EXCL; -INFINITY/INFINITY: unbounded */
-    const char *def;    /* the default as YAML flow text; NULL: none (or required) */
+    size_t offset;   /* into struct rb_job, or into the item struct for "x[]." rows */
+    double min, max; /* inclusive unless KF_*_EXCL; -INFINITY/INFINITY: unbounded */
+    const char *def; /* the default as YAML flow text; NULL: none (or required) */
     unsigned flags;
     const char *help;
     const char *const *names; /* KT_ENUM: names[1..name_count-1]; names[0] is the 0 value */
@@ -72,15 +72,17 @@ static const char *const light_names[] = {NULL, "point", "spot", "directional"};
 #define LIGHT(f) offsetof(struct rb_job_light, f)
 /* One row: the last arguments are the help text, then designated initializers for the fields
  * only some types use. */
-#define K(p, t, off, lo, hi, d, fl, ...)                                                          \
-    {.path = (p), .type = (t), .offset = (off), .min = (lo), .max = (hi), .def = (d),          \
-     .flags = (fl), .help = __VA_ARGS__}
+#define K(p, t, off, lo, hi, d, fl, ...)                                                           \
+    {                                                                                              \
+        .path = (p), .type = (t), .offset = (off), .min = (lo), .max = (hi), .def = (d),           \
+        .flags = (fl), .help = __VA_ARGS__                                                         \
+    }
 #define NOLO (-INFINITY)
 #define NOHI INFINITY
 #define ENUM(n) .names = (n), .name_count = COUNT(n)
 
-_Static_assert(offsetof(struct rb_job, height_px) == offsetof(struct rb_job, width_px) +
-                                                         sizeof(uint32_t),
+_Static_assert(offsetof(struct rb_job, height_px) ==
+                   offsetof(struct rb_job, width_px) + sizeof(uint32_t),
                "resolution is stored as two consecutive uint32_t");
 _Static_assert(sizeof(enum rb_integrator_kind) == sizeof(int) &&
                    sizeof(enum rb_interp) == sizeof(int) &&
@@ -94,102 +96,101 @@ static enum rb_status check_light(struct ctx *c, void *items, size_t i, const ch
 
 static const struct key keys[] = {
     K("scene", KT_PATH, JOB(scene_path), NOLO, NOHI, NULL, KF_REQUIRED | KF_MUST_EXIST,
-     "the glTF 2.0 scene (.gltf or .glb) to render"),
+      "the glTF 2.0 scene (.gltf or .glb) to render"),
     K("output", KT_PATH, JOB(output), NOLO, NOHI, "out/frame.####.exr", 0,
-     "output pattern for the EXR frames; a run of '#' is the zero-padded frame number"),
+      "output pattern for the EXR frames; a run of '#' is the zero-padded frame number"),
     K("resolution", KT_UINT2, JOB(width_px), 1, 16384, "[640, 360]", 0,
-     "image width and height in pixels"),
+      "image width and height in pixels"),
     K("frames.start", KT_INT, JOB(frame_start), 0, NOHI, "0", 0, "first frame to render"),
     K("frames.end", KT_INT, JOB(frame_end), -1, NOHI, "-1", 0,
-     "last frame to render, inclusive; -1: to the end of the animation"),
+      "last frame to render, inclusive; -1: to the end of the animation"),
     K("frames.rate", KT_DOUBLE, JOB(rate_fps), 0, NOHI, "24", KF_MIN_EXCL,
-     "frames per second; frame f is rendered at time f / rate"),
+      "frames per second; frame f is rendered at time f / rate"),
     K("camera.node", KT_STRING, JOB(camera.node), NOLO, NOHI, NULL, 0,
-     "name of a glTF node with a camera to look through; excludes camera.keys"),
-    K("camera.fov_y_deg", KT_FLOAT, JOB(camera.fov_y_deg), 0, 180, "40",
-     KF_MIN_EXCL | KF_MAX_EXCL, "vertical field of view of camera.keys in degrees"),
+      "name of a glTF node with a camera to look through; excludes camera.keys"),
+    K("camera.fov_y_deg", KT_FLOAT, JOB(camera.fov_y_deg), 0, 180, "40", KF_MIN_EXCL | KF_MAX_EXCL,
+      "vertical field of view of camera.keys in degrees"),
     K("camera.interpolation", KT_ENUM, JOB(camera.interpolation), NOLO, NOHI, "catmull-rom", 0,
-     "how camera.keys are interpolated", ENUM(interp_names)),
+      "how camera.keys are interpolated", ENUM(interp_names)),
     K("camera.near", KT_FLOAT, JOB(camera.near_m), 0, NOHI, "0", 0,
-     "near clip plane in meters; 0: derived from the scene bounds"),
+      "near clip plane in meters; 0: derived from the scene bounds"),
     K("camera.far", KT_FLOAT, JOB(camera.far_m), 0, NOHI, "0", 0,
-     "far clip plane in meters; 0: derived from the scene bounds"),
+      "far clip plane in meters; 0: derived from the scene bounds"),
     K("camera.keys", KT_LIST, JOB(camera.keys), NOLO, NOHI, "[]", 0,
-     "camera path: keys with strictly increasing t; excludes camera.node",
-     .count_offset = JOB(camera.key_count), .item_size = sizeof(struct rb_job_camera_key),
-     .check = check_camera_key),
+      "camera path: keys with strictly increasing t; excludes camera.node",
+      .count_offset = JOB(camera.key_count), .item_size = sizeof(struct rb_job_camera_key),
+      .check = check_camera_key),
     K("camera.keys[].t", KT_DOUBLE, KEYF(t_s), NOLO, NOHI, NULL, KF_REQUIRED,
-     "time of the key in seconds"),
+      "time of the key in seconds"),
     K("camera.keys[].position", KT_VEC3, KEYF(position), NOLO, NOHI, NULL, KF_REQUIRED,
-     "camera position in world space"),
+      "camera position in world space"),
     K("camera.keys[].look_at", KT_VEC3, KEYF(look_at), NOLO, NOHI, NULL, KF_REQUIRED,
-     "point the camera looks at, in world space"),
+      "point the camera looks at, in world space"),
     K("camera.keys[].fov_y_deg", KT_FLOAT, KEYF(fov_y_deg), 0, 180, "0", KF_MAX_EXCL,
-     "vertical field of view at this key in degrees; 0: camera.fov_y_deg"),
+      "vertical field of view at this key in degrees; 0: camera.fov_y_deg"),
     K("animation.clips", KT_STRLIST, JOB(animation.clips), NOLO, NOHI, "[]", 0,
-     "names of the glTF animations to play together; empty: the first animation",
-     .count_offset = JOB(animation.clip_count)),
+      "names of the glTF animations to play together; empty: the first animation",
+      .count_offset = JOB(animation.clip_count)),
     K("animation.offset_s", KT_DOUBLE, JOB(animation.offset_s), NOLO, NOHI, "0", 0,
-     "animation time at frame 0, in seconds"),
+      "animation time at frame 0, in seconds"),
     K("animation.speed", KT_DOUBLE, JOB(animation.speed), NOLO, NOHI, "1", 0,
-     "animation seconds per second of frame time"),
+      "animation seconds per second of frame time"),
     K("animation.loop", KT_BOOL, JOB(animation.loop), NOLO, NOHI, "true", 0,
-     "wrap the animation time around the clip length"),
+      "wrap the animation time around the clip length"),
     K("lights", KT_LIST, JOB(lights), NOLO, NOHI, "[]", 0, "lights added to the scene's own lights",
-     .count_offset = JOB(light_count), .item_size = sizeof(struct rb_job_light),
-     .check = check_light),
+      .count_offset = JOB(light_count), .item_size = sizeof(struct rb_job_light),
+      .check = check_light),
     K("lights[].type", KT_ENUM, LIGHT(type), NOLO, NOHI, NULL, KF_REQUIRED, "kind of light",
-     ENUM(light_names)),
+      ENUM(light_names)),
     K("lights[].position", KT_VEC3, LIGHT(position), NOLO, NOHI, "[0, 0, 0]", 0,
-     "position of a point or spot light in world space"),
+      "position of a point or spot light in world space"),
     K("lights[].direction", KT_VEC3, LIGHT(direction), NOLO, NOHI, "[0, -1, 0]", KF_NORMALIZE,
-     "direction a spot or directional light travels; normalized"),
-    K("lights[].color", KT_VEC3, LIGHT(color), 0, NOHI, "[1, 1, 1]", 0,
-     "linear Rec.709 color"),
+      "direction a spot or directional light travels; normalized"),
+    K("lights[].color", KT_VEC3, LIGHT(color), 0, NOHI, "[1, 1, 1]", 0, "linear Rec.709 color"),
     K("lights[].intensity", KT_FLOAT, LIGHT(intensity), 0, NOHI, "1", 0,
-     "candela for point and spot lights, lux for directional lights"),
+      "candela for point and spot lights, lux for directional lights"),
     K("lights[].range", KT_FLOAT, LIGHT(range), 0, NOHI, "0", 0,
-     "distance in meters where the light's influence ends; 0: infinite"),
+      "distance in meters where the light's influence ends; 0: infinite"),
     K("lights[].inner_cone_deg", KT_FLOAT, LIGHT(inner_cone_deg), 0, 90, "0", 0,
-     "spot light: angle from the axis where the falloff starts; at most outer_cone_deg"),
+      "spot light: angle from the axis where the falloff starts; at most outer_cone_deg"),
     K("lights[].outer_cone_deg", KT_FLOAT, LIGHT(outer_cone_deg), 0, 90, "45", 0,
-     "spot light: angle from the axis where the light ends"),
+      "spot light: angle from the axis where the light ends"),
     K("scene_lights", KT_BOOL, JOB(use_scene_lights), NOLO, NOHI, "true", 0,
-     "use the scene's KHR_lights_punctual lights"),
+      "use the scene's KHR_lights_punctual lights"),
     K("environment.map", KT_PATH, JOB(environment.map), NOLO, NOHI, NULL, KF_MUST_EXIST,
-     "equirectangular EXR or HDR image of the distant environment"),
+      "equirectangular EXR or HDR image of the distant environment"),
     K("environment.color", KT_VEC3, JOB(environment.color), 0, NOHI, "[0, 0, 0]", 0,
-     "uniform linear Rec.709 radiance where there is no map"),
+      "uniform linear Rec.709 radiance where there is no map"),
     K("environment.intensity", KT_FLOAT, JOB(environment.intensity), 0, NOHI, "1", 0,
-     "multiplier for the map or color"),
+      "multiplier for the map or color"),
     K("environment.rotation_deg", KT_FLOAT, JOB(environment.rotation_deg), NOLO, NOHI, "0", 0,
-     "rotation of the map about +Y in degrees"),
+      "rotation of the map about +Y in degrees"),
     K("integrator.name", KT_ENUM, JOB(integrator.name), NOLO, NOHI, "direct", 0,
-     "the light transport algorithm", ENUM(integrator_names)),
+      "the light transport algorithm", ENUM(integrator_names)),
     K("integrator.direct.shadow_size", KT_UINT, JOB(integrator.direct.shadow_size_px), 16, 8192,
-     "1024", 0, "shadow map size in pixels (per cube face for point lights)"),
+      "1024", 0, "shadow map size in pixels (per cube face for point lights)"),
     K("integrator.direct.shadow_bias", KT_FLOAT, JOB(integrator.direct.shadow_bias), 0, NOHI,
-     "0.002", 0, "shadow depth bias as a fraction of the distance to the light"),
-    K("integrator.direct.pcf_radius", KT_FLOAT, JOB(integrator.direct.pcf_radius_px), 0,
-     NOHI, "1.5", 0, "radius of the 16-tap PCF shadow filter in shadow-map pixels"),
+      "0.002", 0, "shadow depth bias as a fraction of the distance to the light"),
+    K("integrator.direct.pcf_radius", KT_FLOAT, JOB(integrator.direct.pcf_radius_px), 0, NOHI,
+      "1.5", 0, "radius of the 16-tap PCF shadow filter in shadow-map pixels"),
     K("integrator.reference.spp", KT_UINT, JOB(integrator.reference.spp), 1, 1048576, "64", 0,
-     "reference: samples per pixel"),
+      "reference: samples per pixel"),
     K("integrator.reference.max_bounces", KT_UINT, JOB(integrator.reference.max_bounces), 0, 64,
-     "8", 0, "reference: longest path in bounces after the first hit; 0: direct light only"),
-    K("integrator.reference.rr_depth", KT_UINT, JOB(integrator.reference.rr_depth), 0, 64, "3",
-     0, "reference: bounces before Russian roulette may end a path"),
-    K("integrator.reference.paths", KT_ENUM, JOB(integrator.reference.paths), NOLO, NOHI, "full",
-     0, "reference: which light paths count (full, direct, bdpt)", ENUM(path_names)),
+      "8", 0, "reference: longest path in bounces after the first hit; 0: direct light only"),
+    K("integrator.reference.rr_depth", KT_UINT, JOB(integrator.reference.rr_depth), 0, 64, "3", 0,
+      "reference: bounces before Russian roulette may end a path"),
+    K("integrator.reference.paths", KT_ENUM, JOB(integrator.reference.paths), NOLO, NOHI, "full", 0,
+      "reference: which light paths count (full, direct, bdpt)", ENUM(path_names)),
     K("integrator.reference.time_limit_s", KT_DOUBLE, JOB(integrator.reference.time_limit_s), 0,
-     NOHI, "0", 0, "reference: stop after the pass of samples that crosses this time; 0: none"),
+      NOHI, "0", 0, "reference: stop after the pass of samples that crosses this time; 0: none"),
     K("color.config", KT_PATH, JOB(color.config), NOLO, NOHI, NULL, KF_MUST_EXIST,
-     "OpenColorIO config for previews; none: $OCIO, then the bundled config"),
+      "OpenColorIO config for previews; none: $OCIO, then the bundled config"),
     K("color.display", KT_STRING, JOB(color.display), NOLO, NOHI, NULL, 0,
-     "OpenColorIO display for previews; none: the config's default"),
+      "OpenColorIO display for previews; none: the config's default"),
     K("color.view", KT_STRING, JOB(color.view), NOLO, NOHI, NULL, 0,
-     "OpenColorIO view for previews; none: the display's default"),
+      "OpenColorIO view for previews; none: the display's default"),
     K("color.preview", KT_BOOL, JOB(color.preview), NOLO, NOHI, "false", 0,
-     "also write NAME.####.png through the display and view beside each EXR"),
+      "also write NAME.####.png through the display and view beside each EXR"),
 };
 
 #define KEY_COUNT COUNT(keys)
@@ -198,21 +199,21 @@ static const struct key keys[] = {
 
 /* Where a value came from; seq == 0: never set. */
 struct mark {
-    const char *src; /* the job file's name or "--set"; NULL: no position (a quick look) */
+    const char *src;  /* the job file's name or "--set"; NULL: no position (a quick look) */
     size_t line, col; /* 1-based; for --set, line is the override's 1-based index */
     unsigned seq;     /* order of assignment, to tell which of two keys came last */
 };
 
 struct ctx {
     struct rb_job *job;
-    const char *name;      /* the job as named in messages */
-    const char *base_dir;  /* resolves relative paths; "" for the current directory */
-    const char *text;      /* the document's text, for reader errors that carry an offset */
-    yaml_document_t *doc;  /* the document being walked */
-    size_t set_index;      /* 1-based override index; 0 while walking the file */
-    size_t col_offset;     /* columns before an override's value: strlen("key=") */
+    const char *name;     /* the job as named in messages */
+    const char *base_dir; /* resolves relative paths; "" for the current directory */
+    const char *text;     /* the document's text, for reader errors that carry an offset */
+    yaml_document_t *doc; /* the document being walked */
+    size_t set_index;     /* 1-based override index; 0 while walking the file */
+    size_t col_offset;    /* columns before an override's value: strlen("key=") */
     unsigned seq;
-    struct mark root;      /* the file's top-level mapping */
+    struct mark root;             /* the file's top-level mapping */
     struct mark marks[KEY_COUNT]; /* where each top-level key was last set */
     struct rb_err *err;
 };
@@ -653,8 +654,8 @@ static enum rb_status set_string(struct ctx *c, const struct key *k, yaml_node_t
                     k->type == KT_PATH ? "path" : "string");
     if (!scalar(node)[0])
         return fail(c, at, RB_E_INVALID, "'%s' must not be empty", shown);
-    char *s = k->type == KT_PATH ? resolve_path(c->base_dir, scalar(node))
-                                 : rb_strdup(scalar(node));
+    char *s =
+        k->type == KT_PATH ? resolve_path(c->base_dir, scalar(node)) : rb_strdup(scalar(node));
     if (!s)
         return fail(c, at, RB_E_NOMEM, "out of memory for '%s'", shown);
     free(*dst);
@@ -680,8 +681,7 @@ static enum rb_status set_enum(struct ctx *c, const struct key *k, yaml_node_t *
         snprintf(choices + len, sizeof(choices) - len, "%s%s", i > 1 ? ", " : "", k->names[i]);
     }
     suggest_name(k, s, hint, sizeof(hint));
-    return fail(c, at, RB_E_INVALID, "'%s' must be one of %s, not '%s'%s", shown, choices, s,
-                hint);
+    return fail(c, at, RB_E_INVALID, "'%s' must be one of %s, not '%s'%s", shown, choices, s, hint);
 }
 
 /* Sets key k of the struct at base from node; marks (may be NULL) records where. */
@@ -743,8 +743,8 @@ static enum rb_status set_key(struct ctx *c, const struct key *k, yaml_node_t *n
 }
 
 /* Walks node into the key or mapping at path (which must exist in the table). */
-static enum rb_status walk_at(struct ctx *c, const char *path, const char *shown,
-                              yaml_node_t *node, void *base, struct mark *marks)
+static enum rb_status walk_at(struct ctx *c, const char *path, const char *shown, yaml_node_t *node,
+                              void *base, struct mark *marks)
 {
     const struct key *k = find_key(path);
     if (k)
@@ -779,8 +779,8 @@ static enum rb_status walk_mapping(struct ctx *c, yaml_node_t *map, const char *
         }
         char path[128], full_shown[160];
         int len = snprintf(path, sizeof(path), "%s%s%s", prefix, prefix[0] ? "." : "", name);
-        bool known = name[0] && !strpbrk(name, ".[]") && len > 0 &&
-                     (size_t)len < sizeof(path) && (find_key(path) || is_mapping_path(path));
+        bool known = name[0] && !strpbrk(name, ".[]") && len > 0 && (size_t)len < sizeof(path) &&
+                     (find_key(path) || is_mapping_path(path));
         if (!known) {
             char hint[80];
             suggest_key(prefix, name, hint, sizeof(hint));
@@ -797,8 +797,8 @@ static enum rb_status walk_mapping(struct ctx *c, yaml_node_t *map, const char *
 }
 
 /* Parses text into doc; on failure, a message at libyaml's mark. */
-static enum rb_status load_yaml(struct ctx *c, const char *text, size_t size,
-                                yaml_document_t *doc, bool *has_doc)
+static enum rb_status load_yaml(struct ctx *c, const char *text, size_t size, yaml_document_t *doc,
+                                bool *has_doc)
 {
     yaml_parser_t parser;
     enum rb_status st = RB_OK;
@@ -863,8 +863,7 @@ static enum rb_status apply_defaults(struct ctx *c, const char *prefix, void *ba
         st = load_yaml(c, keys[i].def, strlen(keys[i].def), &doc, &has_doc);
         if (!st) {
             c->doc = &doc;
-            st = set_key(c, &keys[i], yaml_document_get_root_node(&doc), keys[i].path, base,
-                         NULL);
+            st = set_key(c, &keys[i], yaml_document_get_root_node(&doc), keys[i].path, base, NULL);
         }
         if (has_doc)
             yaml_document_delete(&doc);
@@ -982,8 +981,8 @@ static enum rb_status check_camera_key(struct ctx *c, void *items, size_t i, con
     const struct rb_job_camera_key *k = items;
     if (i > 0 && !(k[i].t_s > k[i - 1].t_s))
         return fail(c, mark_of(marks, "camera.keys[].t", NULL, item_mark), RB_E_INVALID,
-                    "'%s.t' (%g) must be greater than the previous key's t (%g)", shown,
-                    k[i].t_s, k[i - 1].t_s);
+                    "'%s.t' (%g) must be greater than the previous key's t (%g)", shown, k[i].t_s,
+                    k[i - 1].t_s);
     if (!memcmp(k[i].position, k[i].look_at, sizeof(k[i].position)))
         return fail(c, mark_of(marks, "camera.keys[].look_at", NULL, item_mark), RB_E_INVALID,
                     "'%s.look_at' must differ from its position", shown);
@@ -996,8 +995,7 @@ static enum rb_status check_light(struct ctx *c, void *items, size_t i, const ch
     const struct rb_job_light *l = (const struct rb_job_light *)items + i;
     if (l->inner_cone_deg > l->outer_cone_deg)
         return fail(c,
-                    mark_of(marks, "lights[].inner_cone_deg", "lights[].outer_cone_deg",
-                            item_mark),
+                    mark_of(marks, "lights[].inner_cone_deg", "lights[].outer_cone_deg", item_mark),
                     RB_E_INVALID, "'%s.inner_cone_deg' (%g) must be <= its outer_cone_deg (%g)",
                     shown, l->inner_cone_deg, l->outer_cone_deg);
     return RB_OK;
@@ -1024,8 +1022,8 @@ static enum rb_status validate(struct ctx *c)
     if (job->camera.near_m > 0 && job->camera.far_m > 0 &&
         !(job->camera.far_m > job->camera.near_m))
         return fail(c, mark_of(m, "camera.far", "camera.near", &c->root), RB_E_INVALID,
-                    "'camera.far' (%g) must be greater than 'camera.near' (%g)",
-                    job->camera.far_m, job->camera.near_m);
+                    "'camera.far' (%g) must be greater than 'camera.near' (%g)", job->camera.far_m,
+                    job->camera.near_m);
 
     for (size_t i = 0; i < KEY_COUNT; i++) {
         if (!(keys[i].flags & KF_MUST_EXIST) || keys[i].type != KT_PATH)
@@ -1101,8 +1099,8 @@ void rb_job_rehash(struct rb_job *job)
     h = h_u32(h, job->height_px);
     h = h_f64(h, job->rate_fps);
 
-    enum rb_interp interp = job->camera.interpolation ? job->camera.interpolation
-                                                      : RB_INTERP_CATMULL_ROM;
+    enum rb_interp interp =
+        job->camera.interpolation ? job->camera.interpolation : RB_INTERP_CATMULL_ROM;
     h = h_str(h, job->camera.node);
     h = h_f32(h, job->camera.fov_y_deg);
     h = h_u32(h, (uint32_t)interp);
@@ -1143,8 +1141,8 @@ void rb_job_rehash(struct rb_job *job)
     h = h_f32(h, job->environment.intensity);
     h = h_f32(h, job->environment.rotation_deg);
 
-    enum rb_integrator_kind kind = job->integrator.name ? job->integrator.name
-                                                        : RB_INTEGRATOR_DIRECT;
+    enum rb_integrator_kind kind =
+        job->integrator.name ? job->integrator.name : RB_INTEGRATOR_DIRECT;
     h = h_u32(h, (uint32_t)kind);
     h = h_u32(h, job->integrator.direct.shadow_size_px);
     h = h_f32(h, job->integrator.direct.shadow_bias);
@@ -1174,8 +1172,10 @@ enum rb_status rb_job_parse(const char *name, const char *text, size_t size, con
                             struct rb_job **out, struct rb_err *err)
 {
     struct rb_err scratch = RB_ERR_INIT;
-    struct ctx c = {.name = name ? name : "job", .base_dir = base_dir ? base_dir : "",
-                    .text = text, .err = err ? err : &scratch};
+    struct ctx c = {.name = name ? name : "job",
+                    .base_dir = base_dir ? base_dir : "",
+                    .text = text,
+                    .err = err ? err : &scratch};
     yaml_document_t doc;
     bool has_doc = false;
     enum rb_status st = RB_OK;

@@ -99,11 +99,11 @@ struct rb_job {
             float pcf_radius_px;     /* radius of the 16-tap PCF kernel, default 1.5 */
         } direct;
         struct {
-            uint32_t spp;          /* samples per pixel, default 64 */
-            uint32_t max_bounces;  /* default 8; 0: direct light only */
-            uint32_t rr_depth;     /* Russian roulette after this many bounces, default 3 */
+            uint32_t spp;         /* samples per pixel, default 64 */
+            uint32_t max_bounces; /* default 8; 0: direct light only */
+            uint32_t rr_depth;    /* Russian roulette after this many bounces, default 3 */
             enum rb_path_space paths;
-            double time_limit_s;   /* 0: none; else stop at a whole pass when it runs out */
+            double time_limit_s; /* 0: none; else stop at a whole pass when it runs out */
         } reference;
     } integrator;
 

@@ -50,14 +50,14 @@ void rb_pass_animate_record(struct rb_pass_animate *p, VkCommandBuffer cmd,
     rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &slot->weights);
     rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &slot->vertices);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
-    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_COMPUTE,
-                         p->layout.pipeline_layout, &b);
+    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout.pipeline_layout,
+                         &b);
     for (uint32_t i = 0; i < frame->instance_count; i++) {
         uint32_t count = frame->instances[i].range[1];
         if (count == 0)
             continue;
-        vkCmdPushConstants(cmd, p->layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0,
-                           sizeof(uint32_t), &i);
+        vkCmdPushConstants(cmd, p->layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0, sizeof(uint32_t),
+                           &i);
         vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
     }
 }

@@ -57,8 +57,8 @@ void rb_pass_direct_record(struct rb_pass_direct *p, VkCommandBuffer cmd,
     rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, frame->direct.view, VK_NULL_HANDLE,
                       VK_IMAGE_LAYOUT_GENERAL);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
-    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_COMPUTE,
-                         p->layout.pipeline_layout, &b);
+    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout.pipeline_layout,
+                         &b);
     vkCmdDispatch(cmd, (frame->width_px + 7) / 8, (frame->height_px + 7) / 8, 1);
 }
 

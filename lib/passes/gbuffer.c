@@ -99,8 +99,8 @@ void rb_pass_gbuffer_record(struct rb_pass_gbuffer *p, VkCommandBuffer cmd,
 
     vkCmdBeginRendering(cmd, &ri);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p->pipeline);
-    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_GRAPHICS,
-                         p->layout.pipeline_layout, &b);
+    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p->layout.pipeline_layout,
+                         &b);
     VkViewport vp = {0, 0, (float)frame->width_px, (float)frame->height_px, 0.0f, 1.0f};
     VkRect2D sc = {{0, 0}, {frame->width_px, frame->height_px}};
     vkCmdSetViewport(cmd, 0, 1, &vp);

@@ -56,8 +56,8 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
                           VK_IMAGE_LAYOUT_GENERAL);
     rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &frame->readback);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
-    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_COMPUTE,
-                         p->layout.pipeline_layout, &b);
+    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout.pipeline_layout,
+                         &b);
     vkCmdDispatch(cmd, (frame->width_px + 7) / 8, (frame->height_px + 7) / 8, 1);
     /* Make the shader writes visible to the host's read after the fence. */
     VkMemoryBarrier2 mb = {

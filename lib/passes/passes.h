@@ -38,7 +38,7 @@ struct rb_frame {
     struct rb_gpu_buffer morph_deltas; /* struct rb_scene_morph_delta */
     struct rb_gpu_buffer indices;      /* uint32, into the world vertex buffers */
     uint32_t index_count;
-    struct rb_gpu_buffer materials;    /* struct rb_gpu_material */
+    struct rb_gpu_buffer materials;                     /* struct rb_gpu_material */
     struct rb_gpu_image srgb_textures, linear_textures; /* RGBA8 arrays, one layer a texture */
 
     struct rb_frame_slot slots[2];
@@ -50,9 +50,9 @@ struct rb_frame {
     struct rb_gpu_buffer lights;       /* struct rb_gpu_light, host-visible */
     struct rb_gpu_buffer shadow_views; /* struct rb_gpu_shadow_view, host-visible */
     uint32_t light_count, shadow_layer_count;
-    struct rb_gpu_image shadow_maps;   /* R32F array, a view per layer */
-    struct rb_gpu_image shadow_depth;  /* D32 scratch depth for rendering a layer */
-    struct rb_gpu_image env_map;       /* RGBA32F equirectangular (1x1 when none) */
+    struct rb_gpu_image shadow_maps;  /* R32F array, a view per layer */
+    struct rb_gpu_image shadow_depth; /* D32 scratch depth for rendering a layer */
+    struct rb_gpu_image env_map;      /* RGBA32F equirectangular (1x1 when none) */
 
     /* G-buffer and outputs (all in VK_IMAGE_LAYOUT_GENERAL) */
     struct rb_gpu_image gbuffer[RB_GBUFFER_COLOR_COUNT]; /* position, normal, albedo, specular,
@@ -61,11 +61,17 @@ struct rb_frame {
     struct rb_gpu_image direct;
     const struct rb_gpu_image *beauty; /* what the integrator composes; direct's own image for
                                         * the direct integrator */
-    struct rb_gpu_buffer readback; /* RB_OUT_FLOATS per pixel, host-visible */
+    struct rb_gpu_buffer readback;     /* RB_OUT_FLOATS per pixel, host-visible */
 };
 
-enum { RB_GB_POSITION = 0, RB_GB_NORMAL, RB_GB_ALBEDO, RB_GB_SPECULAR, RB_GB_EMISSION,
-       RB_GB_MOTION };
+enum {
+    RB_GB_POSITION = 0,
+    RB_GB_NORMAL,
+    RB_GB_ALBEDO,
+    RB_GB_SPECULAR,
+    RB_GB_EMISSION,
+    RB_GB_MOTION
+};
 
 /* The formats of the G-buffer attachments, in order. */
 extern const VkFormat rb_gbuffer_formats[RB_GBUFFER_COLOR_COUNT];

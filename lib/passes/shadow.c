@@ -87,8 +87,8 @@ void rb_pass_shadow_record(struct rb_pass_shadow *p, VkCommandBuffer cmd,
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p->pipeline);
         rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_GRAPHICS,
                              p->layout.pipeline_layout, &b);
-        vkCmdPushConstants(cmd, p->layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0,
-                           sizeof(uint32_t), &layer);
+        vkCmdPushConstants(cmd, p->layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0, sizeof(uint32_t),
+                           &layer);
         VkViewport vp = {0, 0, (float)size, (float)size, 0.0f, 1.0f};
         VkRect2D sc = {{0, 0}, {size, size}};
         vkCmdSetViewport(cmd, 0, 1, &vp);

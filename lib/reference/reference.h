@@ -17,7 +17,7 @@ struct rb_reference_desc {
     const struct rb_scene *scene; /* borrowed */
     const float *env_rgba;        /* equirectangular RGBA, or NULL: job->environment.color */
     uint32_t env_width_px, env_height_px;
-    uint32_t thread_count;        /* 0: all cores */
+    uint32_t thread_count; /* 0: all cores */
     /* Called after each whole pass of samples with the samples done so far (for progress);
      * may be NULL. Returning false stops after that pass (as a time limit does). */
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
@@ -32,16 +32,16 @@ struct rb_reference_result {
     double time_s;
     uint32_t width_px, height_px;
     const float *pixels;
-    uint32_t spp;        /* samples per pixel reached (less than asked when a limit stopped it) */
-    uint64_t ray_count;  /* rays traced (camera, bounce and shadow rays) */
-    double render_s;     /* wall time of the tracing */
+    uint32_t spp;       /* samples per pixel reached (less than asked when a limit stopped it) */
+    uint64_t ray_count; /* rays traced (camera, bounce and shadow rays) */
+    double render_s;    /* wall time of the tracing */
     struct rb_mat4 world_to_camera, world_to_ndc; /* as the GPU integrators write them */
 };
 
 /* Builds the reference for the job and scene (Embree device, light tables). Fails with
  * RB_E_EXTERNAL for an Embree error, RB_E_NOMEM. */
-enum rb_status rb_reference_create(const struct rb_reference_desc *desc,
-                                   struct rb_reference **out, struct rb_err *err);
+enum rb_status rb_reference_create(const struct rb_reference_desc *desc, struct rb_reference **out,
+                                   struct rb_err *err);
 
 /* Renders one frame (time = frame / rate): evaluates the animation, deforms the geometry on the
  * CPU (skins, morphs, node transforms: the same math as the animate pass), rebuilds the BVH,

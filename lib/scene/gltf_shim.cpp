@@ -17,7 +17,8 @@
 #include <string>
 #include <vector>
 
-namespace {
+namespace
+{
 
 struct Doc {
     rb_gltf_doc pub{}; // pub.impl points back here
@@ -146,9 +147,9 @@ void mirror(Doc &d)
                                        pbr.baseColorTexture.extensions);
         o.metallic = pbr.metallicFactor;
         o.roughness = pbr.roughnessFactor;
-        o.metallic_roughness_tex = texture_ref(pbr.metallicRoughnessTexture.index,
-                                               pbr.metallicRoughnessTexture.texCoord,
-                                               pbr.metallicRoughnessTexture.extensions);
+        o.metallic_roughness_tex =
+            texture_ref(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord,
+                        pbr.metallicRoughnessTexture.extensions);
         o.normal_tex = texture_ref(mat.normalTexture.index, mat.normalTexture.texCoord,
                                    mat.normalTexture.extensions);
         o.normal_scale = mat.normalTexture.scale;
@@ -174,8 +175,7 @@ void mirror(Doc &d)
                 for (int k = 0; k < 3; k++)
                     if (sc.Get(k).IsNumber())
                         o.specular_color[k] = sc.Get(k).GetNumberAsDouble();
-            o.has_specular_textures = sp->Has("specularTexture") ||
-                                      sp->Has("specularColorTexture");
+            o.has_specular_textures = sp->Has("specularTexture") || sp->Has("specularColorTexture");
         }
         o.alpha_mode = mat.alphaMode.c_str();
         o.alpha_cutoff = mat.alphaCutoff;
@@ -302,9 +302,8 @@ void mirror(Doc &d)
         d.animations.push_back(o);
     }
     for (const auto &s : m.scenes)
-        d.scenes.push_back(rb_gltf_scene{s.name.c_str(),
-                                         reinterpret_cast<const int32_t *>(s.nodes.data()),
-                                         s.nodes.size()});
+        d.scenes.push_back(rb_gltf_scene{
+            s.name.c_str(), reinterpret_cast<const int32_t *>(s.nodes.data()), s.nodes.size()});
     for (const auto &e : m.extensionsRequired)
         d.ext_required.push_back(e.c_str());
     for (const auto &e : m.extensionsUsed)
@@ -404,5 +403,4 @@ extern "C" void rb_gltf_shim_free(struct rb_gltf_doc *doc) noexcept
 {
     if (doc)
         delete static_cast<Doc *>(doc->impl); // Doc's destructor cannot throw
-
 }

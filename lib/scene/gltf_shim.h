@@ -78,7 +78,7 @@ struct rb_gltf_material {
     struct rb_gltf_texture_ref emissive_tex;
     bool has_emissive_strength; /* KHR_materials_emissive_strength */
     double emissive_strength;
-    bool has_specular;          /* KHR_materials_specular */
+    bool has_specular; /* KHR_materials_specular */
     double specular_factor;
     double specular_color[3];
     bool has_specular_textures; /* its textures, which are not supported */

@@ -1,7 +1,8 @@
 /* The scene: a glTF 2.0 file (.gltf or .glb, through tinygltf) as flat C arrays, and its
  * evaluation at a time: animated node transforms, skin joint matrices, morph weights, the camera
  * track and the lights in world space. Geometry is kept in the file's local spaces; the GPU
- * `animate` pass applies skins, morphs and node transforms. Objects refer to each other by index. */
+ * `animate` pass applies skins, morphs and node transforms. Objects refer to each other by index.
+ */
 #ifndef RB_SCENE_SCENE_H
 #define RB_SCENE_SCENE_H
 
@@ -27,23 +28,23 @@ struct rb_scene_morph_delta {
 };
 
 struct rb_scene_texture {
-    char *name;       /* for messages: the image's name or uri */
+    char *name; /* for messages: the image's name or uri */
     uint32_t width_px, height_px;
-    uint8_t *rgba8;   /* width*height*4 bytes, rows top to bottom, as stored (sRGB or linear) */
+    uint8_t *rgba8; /* width*height*4 bytes, rows top to bottom, as stored (sRGB or linear) */
 };
 
 enum rb_alpha_mode { RB_ALPHA_OPAQUE = 0, RB_ALPHA_MASK, RB_ALPHA_BLEND };
 
 struct rb_scene_material {
     char *name;
-    float base_color[4];          /* factor, linear */
-    uint32_t base_color_tex;      /* texture index or RB_SCENE_NONE; sRGB-encoded */
-    float metallic, roughness;    /* factors */
+    float base_color[4];             /* factor, linear */
+    uint32_t base_color_tex;         /* texture index or RB_SCENE_NONE; sRGB-encoded */
+    float metallic, roughness;       /* factors */
     uint32_t metallic_roughness_tex; /* G = roughness, B = metallic; linear */
     uint32_t normal_tex;
     float normal_scale;
-    float emissive[3];            /* factor times KHR_materials_emissive_strength */
-    uint32_t emissive_tex;        /* sRGB-encoded */
+    float emissive[3];     /* factor times KHR_materials_emissive_strength */
+    uint32_t emissive_tex; /* sRGB-encoded */
     enum rb_alpha_mode alpha_mode;
     float alpha_cutoff;
     bool double_sided;
@@ -52,13 +53,13 @@ struct rb_scene_material {
 };
 
 struct rb_scene_primitive {
-    uint32_t material;      /* index; the scene always has a default material at the end */
-    uint32_t first_vertex;  /* into scene->vertices */
+    uint32_t material;     /* index; the scene always has a default material at the end */
+    uint32_t first_vertex; /* into scene->vertices */
     uint32_t vertex_count;
-    uint32_t first_index;   /* into scene->indices; values are relative to first_vertex */
-    uint32_t index_count;   /* triangles only; non-indexed primitives get 0..n-1 */
-    uint32_t first_morph;   /* into scene->morph_deltas: target t, vertex v at
-                             * first_morph + t * vertex_count + v */
+    uint32_t first_index; /* into scene->indices; values are relative to first_vertex */
+    uint32_t index_count; /* triangles only; non-indexed primitives get 0..n-1 */
+    uint32_t first_morph; /* into scene->morph_deltas: target t, vertex v at
+                           * first_morph + t * vertex_count + v */
     uint32_t morph_target_count;
 };
 
@@ -76,8 +77,8 @@ struct rb_scene_node {
     struct rb_quat rotation;
     struct rb_vec3 scale;
     uint32_t mesh, skin, camera, light; /* RB_SCENE_NONE when absent */
-    float *weights;   /* node.weights override, or NULL */
-    bool in_scene;    /* reachable from the default scene's roots */
+    float *weights;                     /* node.weights override, or NULL */
+    bool in_scene;                      /* reachable from the default scene's roots */
 };
 
 struct rb_scene_skin {
@@ -109,9 +110,9 @@ enum rb_anim_interp { RB_ANIM_LINEAR = 0, RB_ANIM_STEP, RB_ANIM_CUBICSPLINE };
 
 struct rb_scene_anim_sampler {
     enum rb_anim_interp interpolation;
-    float *times;       /* key_count, increasing */
-    float *values;      /* key_count * components (x3 for CUBICSPLINE: in-tangent, value,
-                         * out-tangent per key, as glTF stores them) */
+    float *times;  /* key_count, increasing */
+    float *values; /* key_count * components (x3 for CUBICSPLINE: in-tangent, value,
+                    * out-tangent per key, as glTF stores them) */
     uint32_t key_count;
     uint32_t components; /* 3, 4, or the morph target count */
 };
@@ -217,8 +218,8 @@ void rb_scene_sample(const struct rb_scene_anim_sampler *s, float t, float *out)
  * the key interval. This variant is for a channel of the given path: a 4-component
  * RB_ANIM_ROTATION sampler slerps (LINEAR) or is normalized after interpolation (STEP,
  * CUBICSPLINE), as rb_scene_evaluate does. Other paths are plain rb_scene_sample. */
-void rb_scene_sample_path(const struct rb_scene_anim_sampler *s, enum rb_anim_path path,
-                          float t, float *out);
+void rb_scene_sample_path(const struct rb_scene_anim_sampler *s, enum rb_anim_path path, float t,
+                          float *out);
 
 /* The camera at a time, in world space. */
 struct rb_camera {

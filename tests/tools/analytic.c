@@ -109,8 +109,8 @@ static double lambert(const double light[3], double intensity, const double p[3]
 
 /* The glTF 2.0 metallic-roughness BRDF (spec appendix B) times cos, written here in double
  * independently of the shaders: Lambert + GGX, Smith height-correlated, Schlick. */
-static double gltf_brdf_cos(double metallic, double roughness, const double n[3],
-                            const double v[3], const double l[3])
+static double gltf_brdf_cos(double metallic, double roughness, const double n[3], const double v[3],
+                            const double l[3])
 {
     double h[3] = {v[0] + l[0], v[1] + l[1], v[2] + l[2]};
     normalize(h);
@@ -125,7 +125,8 @@ static double gltf_brdf_cos(double metallic, double roughness, const double n[3]
     double F = f0 + (1.0 - f0) * pow(1.0 - vdh, 5.0);
     double dd = ndh * ndh * (a2 - 1.0) + 1.0;
     double D = a2 / (PI * dd * dd);
-    double V = 0.5 / (ndl * sqrt(ndv * ndv * (1.0 - a2) + a2) + ndv * sqrt(ndl * ndl * (1.0 - a2) + a2));
+    double V =
+        0.5 / (ndl * sqrt(ndv * ndv * (1.0 - a2) + a2) + ndv * sqrt(ndl * ndl * (1.0 - a2) + a2));
     double c_diff = albedo * (1.0 - metallic);
     return ((1.0 - F) * c_diff / PI + F * D * V) * ndl;
 }
@@ -134,9 +135,9 @@ static int write_scene(const char *dir, const char *name, double metallic, doubl
                        int lambert)
 {
     /* Two quads: floor (4 verts) and occluder (4 verts), normals +Y, indices 6 each. */
-    float pos[8][3] = {{-10, 0, -10}, {10, 0, -10}, {10, 0, 10}, {-10, 0, 10},
-                       {1.25f, 1, -0.25f}, {1.75f, 1, -0.25f}, {1.75f, 1, 0.25f},
-                       {1.25f, 1, 0.25f}};
+    float pos[8][3] = {{-10, 0, -10},     {10, 0, -10},       {10, 0, 10},
+                       {-10, 0, 10},      {1.25f, 1, -0.25f}, {1.75f, 1, -0.25f},
+                       {1.75f, 1, 0.25f}, {1.25f, 1, 0.25f}};
     float nrm[8][3];
     uint16_t idx[12] = {0, 2, 1, 0, 3, 2, 0, 2, 1, 0, 3, 2};
     for (int i = 0; i < 8; i++)
@@ -167,34 +168,37 @@ static int write_scene(const char *dir, const char *name, double metallic, doubl
         perror(path);
         return 1;
     }
-    fprintf(f,
-            "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_materials_specular\"],"
-            "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],"
-            "\"nodes\":[{\"mesh\":0,\"name\":\"Floor\"},{\"mesh\":1,\"name\":\"Occluder\"}],"
-            "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":2},"
-            "\"indices\":4,\"material\":0}]},"
-            "{\"primitives\":[{\"attributes\":{\"POSITION\":1,\"NORMAL\":3},\"indices\":5,"
-            "\"material\":0}]}],"
-            "\"materials\":[{\"name\":\"Floor\",\"doubleSided\":true,"
-            "\"pbrMetallicRoughness\":{\"baseColorFactor\":[%g,%g,%g,1],\"metallicFactor\":%g,"
-            "\"roughnessFactor\":%g}%s}],"
-            "\"buffers\":[{\"byteLength\":%zu,\"uri\":\"data:application/octet-stream;base64,%s\"}],"
-            "\"bufferViews\":[{\"buffer\":0,\"byteOffset\":0,\"byteLength\":96},"
-            "{\"buffer\":0,\"byteOffset\":96,\"byteLength\":96},"
-            "{\"buffer\":0,\"byteOffset\":192,\"byteLength\":24}],"
-            "\"accessors\":["
-            "{\"bufferView\":0,\"byteOffset\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\","
-            "\"min\":[-10,0,-10],\"max\":[10,0,10]},"
-            "{\"bufferView\":0,\"byteOffset\":48,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\","
-            "\"min\":[1.25,1,-0.25],\"max\":[1.75,1,0.25]},"
-            "{\"bufferView\":1,\"byteOffset\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},"
-            "{\"bufferView\":1,\"byteOffset\":48,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},"
-            "{\"bufferView\":2,\"byteOffset\":0,\"componentType\":5123,\"count\":6,\"type\":\"SCALAR\"},"
-            "{\"bufferView\":2,\"byteOffset\":12,\"componentType\":5123,\"count\":6,\"type\":\"SCALAR\"}"
-            "]}\n",
-            albedo, albedo, albedo, metallic, roughness,
-            lambert ? ",\"extensions\":{\"KHR_materials_specular\":{\"specularFactor\":0}}" : "",
-            sizeof(buf), enc);
+    fprintf(
+        f,
+        "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_materials_specular\"],"
+        "\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],"
+        "\"nodes\":[{\"mesh\":0,\"name\":\"Floor\"},{\"mesh\":1,\"name\":\"Occluder\"}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":2},"
+        "\"indices\":4,\"material\":0}]},"
+        "{\"primitives\":[{\"attributes\":{\"POSITION\":1,\"NORMAL\":3},\"indices\":5,"
+        "\"material\":0}]}],"
+        "\"materials\":[{\"name\":\"Floor\",\"doubleSided\":true,"
+        "\"pbrMetallicRoughness\":{\"baseColorFactor\":[%g,%g,%g,1],\"metallicFactor\":%g,"
+        "\"roughnessFactor\":%g}%s}],"
+        "\"buffers\":[{\"byteLength\":%zu,\"uri\":\"data:application/octet-stream;base64,%s\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteOffset\":0,\"byteLength\":96},"
+        "{\"buffer\":0,\"byteOffset\":96,\"byteLength\":96},"
+        "{\"buffer\":0,\"byteOffset\":192,\"byteLength\":24}],"
+        "\"accessors\":["
+        "{\"bufferView\":0,\"byteOffset\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\","
+        "\"min\":[-10,0,-10],\"max\":[10,0,10]},"
+        "{\"bufferView\":0,\"byteOffset\":48,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\","
+        "\"min\":[1.25,1,-0.25],\"max\":[1.75,1,0.25]},"
+        "{\"bufferView\":1,\"byteOffset\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},"
+        "{\"bufferView\":1,\"byteOffset\":48,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},"
+        "{\"bufferView\":2,\"byteOffset\":0,\"componentType\":5123,\"count\":6,\"type\":\"SCALAR\"}"
+        ","
+        "{\"bufferView\":2,\"byteOffset\":12,\"componentType\":5123,\"count\":6,\"type\":"
+        "\"SCALAR\"}"
+        "]}\n",
+        albedo, albedo, albedo, metallic, roughness,
+        lambert ? ",\"extensions\":{\"KHR_materials_specular\":{\"specularFactor\":0}}" : "",
+        sizeof(buf), enc);
     return fclose(f) != 0;
 }
 
@@ -313,8 +317,8 @@ static int check_brdf(const char *path, double metallic, double roughness)
                 worst = rel;
             checked++;
             if (rel > 0.01 && bad++ < 5)
-                check(0, "pixel %d,%d (floor %.3f,%.3f): %.6g, glTF BRDF %.6g (%.2f%%)", x, y,
-                      p[0], p[2], got, want, rel * 100.0);
+                check(0, "pixel %d,%d (floor %.3f,%.3f): %.6g, glTF BRDF %.6g (%.2f%%)", x, y, p[0],
+                      p[2], got, want, rel * 100.0);
         }
     check(checked > 100 && bad == 0,
           "metallic %g roughness %g: %d pixels match the glTF BRDF, worst %.3f%%", metallic,
@@ -342,19 +346,18 @@ static int check_sun(const char *path)
             if (p[0] > 1.3 && p[0] < 1.7 && fabs(p[2]) < 0.2) {
                 dark++;
                 if (got > 1e-6 && bad++ < 5)
-                    check(0, "pixel %d,%d (floor %.2f,%.2f) under the occluder: %g, want 0", x,
-                          y, p[0], p[2], got);
+                    check(0, "pixel %d,%d (floor %.2f,%.2f) under the occluder: %g, want 0", x, y,
+                          p[0], p[2], got);
             } else if (!(p[0] > 1.1 && p[0] < 1.9 && fabs(p[2]) < 0.4)) {
                 lit++;
                 if (fabs(got - want) > 0.01 * want && bad++ < 5)
-                    check(0, "pixel %d,%d (floor %.2f,%.2f): %g, want E albedo/pi = %g", x, y,
-                          p[0], p[2], got, want);
+                    check(0, "pixel %d,%d (floor %.2f,%.2f): %g, want E albedo/pi = %g", x, y, p[0],
+                          p[2], got, want);
             }
         }
     check(lit > 100 && bad == 0, "%d floor pixels lit by the directional light match E albedo/pi",
           lit);
-    check(dark > 3 && bad == 0, "%d pixels under the occluder are in its directional shadow",
-          dark);
+    check(dark > 3 && bad == 0, "%d pixels under the occluder are in its directional shadow", dark);
     rb_io_image_release(&im.img);
     return 0;
 }
@@ -373,8 +376,9 @@ static int check_sky(const char *path, double r, double g, double b)
             (a >= 0 && p[a] != 0.0f))
             bad++;
     }
-    check(bad == 0, "all %zu background pixels are the environment times its intensity "
-                    "(%g %g %g), alpha 0; %zu are not",
+    check(bad == 0,
+          "all %zu background pixels are the environment times its intensity "
+          "(%g %g %g), alpha 0; %zu are not",
           n, r, g, b, bad);
     rb_io_image_release(&im.img);
     return 0;

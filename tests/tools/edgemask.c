@@ -1,9 +1,9 @@
 /* edgemask REF.exr MASK.exr RADIUS THRESHOLD: writes a mask (R = 1: compare, 0: skip) that
  * excludes every pixel within RADIUS pixels of a radiance discontinuity in REF's beauty: a pixel
  * whose luminance departs from the mean of its two neighbours along x or y by more than
- * THRESHOLD relative (a second difference, so smooth falloff is not an edge; a step is). Shadow-map filtering
- * (16-tap PCF) moves and softens exactly those edges, so GPU-versus-reference agreement is
- * measured away from them; the fraction excluded is printed so the bound is explicit. */
+ * THRESHOLD relative (a second difference, so smooth falloff is not an edge; a step is). Shadow-map
+ * filtering (16-tap PCF) moves and softens exactly those edges, so GPU-versus-reference agreement
+ * is measured away from them; the fraction excluded is printed so the bound is explicit. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -73,8 +73,8 @@ int main(int argc, char **argv)
         }
     static const char *const names[] = {"R"};
     /* One channel, "mask.R": the first channel is what `compare --mask` reads. */
-    struct rb_io_layer layer = {.name = "mask", .channel_count = 1, .channel_names = names,
-                                .pixels = mask};
+    struct rb_io_layer layer = {
+        .name = "mask", .channel_count = 1, .channel_names = names, .pixels = mask};
     if (rb_io_exr_write(argv[2], img.width_px, img.height_px, &layer, 1, NULL, 0, &err)) {
         fprintf(stderr, "edgemask: %s\n", err.msg);
         return 1;

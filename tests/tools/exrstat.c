@@ -29,8 +29,8 @@ int main(int argc, char **argv)
     double mean = n ? sum / (double)n : 0.0, min = atof(argv[3]);
     printf("%s 1 - every value in %s is finite (%zu are not)\n", bad ? "not ok" : "ok", argv[1],
            bad);
-    printf("%s 2 - mean of %s is %g, above %g\n", ch >= 0 && mean > min ? "ok" : "not ok",
-           argv[2], mean, min);
+    printf("%s 2 - mean of %s is %g, above %g\n", ch >= 0 && mean > min ? "ok" : "not ok", argv[2],
+           mean, min);
     printf("1..2\n");
     rb_io_image_release(&img);
     return bad || ch < 0 || mean <= min;

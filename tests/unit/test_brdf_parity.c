@@ -83,30 +83,29 @@ static void test_brdf_parity(void **state)
         fail_msg("no device: %s", err.msg);
 
     struct rb_gpu_buffer in = {0}, out = {0};
-    assert_int_equal(rb_gpu_buffer_init(gpu,
-                                        &(struct rb_gpu_buffer_desc){
-                                            .size_bytes = ENTRIES * 5 * 16,
-                                            .usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                                            .is_host_visible = true,
-                                            .debug_name = "brdf inputs"},
-                                        &in, &err),
-                     RB_OK);
-    assert_int_equal(rb_gpu_buffer_init(gpu,
-                                        &(struct rb_gpu_buffer_desc){
-                                            .size_bytes = ENTRIES * 16,
-                                            .usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                                            .is_host_visible = true,
-                                            .debug_name = "brdf outputs"},
-                                        &out, &err),
-                     RB_OK);
+    assert_int_equal(
+        rb_gpu_buffer_init(gpu,
+                           &(struct rb_gpu_buffer_desc){.size_bytes = ENTRIES * 5 * 16,
+                                                        .usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                        .is_host_visible = true,
+                                                        .debug_name = "brdf inputs"},
+                           &in, &err),
+        RB_OK);
+    assert_int_equal(
+        rb_gpu_buffer_init(gpu,
+                           &(struct rb_gpu_buffer_desc){.size_bytes = ENTRIES * 16,
+                                                        .usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                        .is_host_visible = true,
+                                                        .debug_name = "brdf outputs"},
+                           &out, &err),
+        RB_OK);
     float *p = in.mapped;
     for (int i = 0; i < ENTRIES; i++) {
         const struct entry *e = &table[i];
-        float rows[20] = {e->n[0],      e->n[1],      e->n[2],      e->roughness,
-                          e->v[0],      e->v[1],      e->v[2],      e->f90,
-                          e->l[0],      e->l[1],      e->l[2],      0.0f,
-                          e->c_diff[0], e->c_diff[1], e->c_diff[2], 0.0f,
-                          e->f0[0],     e->f0[1],     e->f0[2],     0.0f};
+        float rows[20] = {e->n[0], e->n[1],  e->n[2],      e->roughness, e->v[0],
+                          e->v[1], e->v[2],  e->f90,       e->l[0],      e->l[1],
+                          e->l[2], 0.0f,     e->c_diff[0], e->c_diff[1], e->c_diff[2],
+                          0.0f,    e->f0[0], e->f0[1],     e->f0[2],     0.0f};
         memcpy(p + 20 * i, rows, sizeof(rows));
     }
 
@@ -116,16 +115,15 @@ static void test_brdf_parity(void **state)
     VkPipeline pipe = VK_NULL_HANDLE;
     assert_int_equal(rb_gpu_layout_init(gpu, types, 2, sizeof(uint32_t), &layout, &err), RB_OK);
     assert_int_equal(rb_gpu_compute_pipeline(gpu, rb_spv_brdf_table_comp,
-                                             sizeof(rb_spv_brdf_table_comp),
-                                             layout.pipeline_layout, "brdf_table", &pipe, &err),
+                                             sizeof(rb_spv_brdf_table_comp), layout.pipeline_layout,
+                                             "brdf_table", &pipe, &err),
                      RB_OK);
     assert_int_equal(rb_gpu_begin(gpu, &err), RB_OK);
     struct rb_gpu_bindings b = {0};
     rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &in);
     rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &out);
     vkCmdBindPipeline(gpu->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe);
-    rb_gpu_push_bindings(gpu, gpu->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout.pipeline_layout,
-                         &b);
+    rb_gpu_push_bindings(gpu, gpu->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout.pipeline_layout, &b);
     uint32_t count = ENTRIES;
     vkCmdPushConstants(gpu->cmd, layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0, sizeof(count),
                        &count);

@@ -158,11 +158,10 @@ static void test_sidecar_path(void **state)
     (void)state;
     char out[256];
     struct rb_err err = RB_ERR_INIT;
-    assert_int_equal(
-        rb_io_sidecar_path("a/shot.0012.exr", ".timing.json", out, sizeof(out), &err), RB_OK);
-    assert_string_equal(out, "a/shot.0012.timing.json");
-    assert_int_equal(rb_io_sidecar_path("a.b/shot", ".hits.exr", out, sizeof(out), &err),
+    assert_int_equal(rb_io_sidecar_path("a/shot.0012.exr", ".timing.json", out, sizeof(out), &err),
                      RB_OK);
+    assert_string_equal(out, "a/shot.0012.timing.json");
+    assert_int_equal(rb_io_sidecar_path("a.b/shot", ".hits.exr", out, sizeof(out), &err), RB_OK);
     assert_string_equal(out, "a.b/shot.hits.exr");
     assert_int_equal(rb_io_sidecar_path("shot.0001.exr", ".png", out, sizeof(out), &err), RB_OK);
     assert_string_equal(out, "shot.0001.png");
@@ -513,8 +512,7 @@ static void test_preview(void **state)
     struct rb_err err = RB_ERR_INIT;
     const char *path = tpath("preview/shot.0001.png");
     assert_int_equal(rb_io_make_parent_dirs(path, &err), RB_OK);
-    if (rb_io_preview_write(path, PW, PH, px, &(struct rb_io_color_desc){.config = CONFIG},
-                            &err))
+    if (rb_io_preview_write(path, PW, PH, px, &(struct rb_io_color_desc){.config = CONFIG}, &err))
         fail_msg("%s", err.msg);
     assert_int_equal(count_entries(tpath("preview"), ".tmp."), 0);
 
@@ -570,19 +568,17 @@ static void test_preview_errors(void **state)
     struct rb_err err = RB_ERR_INIT;
     const char *path = tpath("bad_preview.png");
 
-    assert_int_equal(rb_io_preview_write(path, 1, 1, px,
-                                         &(struct rb_io_color_desc){.config = CONFIG,
-                                                                    .display = "Cinema"},
-                                         &err),
+    assert_int_equal(rb_io_preview_write(
+                         path, 1, 1, px,
+                         &(struct rb_io_color_desc){.config = CONFIG, .display = "Cinema"}, &err),
                      RB_E_INVALID);
-    assert_string_equal(err.msg, "ocio: display 'Cinema' not found in config '" CONFIG
-                                 "' (has: sRGB)");
+    assert_string_equal(err.msg,
+                        "ocio: display 'Cinema' not found in config '" CONFIG "' (has: sRGB)");
 
-    assert_int_equal(rb_io_preview_write(path, 1, 1, px,
-                                         &(struct rb_io_color_desc){.config = CONFIG,
-                                                                    .view = "Filmic"},
-                                         &err),
-                     RB_E_INVALID);
+    assert_int_equal(
+        rb_io_preview_write(path, 1, 1, px,
+                            &(struct rb_io_color_desc){.config = CONFIG, .view = "Filmic"}, &err),
+        RB_E_INVALID);
     assert_non_null(strstr(err.msg, "view 'Filmic'"));
     assert_non_null(strstr(err.msg, "Standard, ACES 1.0 - SDR Video, Raw"));
 
@@ -733,12 +729,12 @@ static void test_timing_escapes(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_frame_path),      cmocka_unit_test(test_sidecar_path),
+        cmocka_unit_test(test_frame_path),       cmocka_unit_test(test_sidecar_path),
         cmocka_unit_test(test_make_parent_dirs), cmocka_unit_test(test_write_atomic),
-        cmocka_unit_test(test_exr_roundtrip),   cmocka_unit_test(test_exr_deterministic),
-        cmocka_unit_test(test_exr_errors),      cmocka_unit_test(test_is_complete),
-        cmocka_unit_test(test_preview),         cmocka_unit_test(test_preview_errors),
-        cmocka_unit_test(test_default_config),  cmocka_unit_test(test_timing_json),
+        cmocka_unit_test(test_exr_roundtrip),    cmocka_unit_test(test_exr_deterministic),
+        cmocka_unit_test(test_exr_errors),       cmocka_unit_test(test_is_complete),
+        cmocka_unit_test(test_preview),          cmocka_unit_test(test_preview_errors),
+        cmocka_unit_test(test_default_config),   cmocka_unit_test(test_timing_json),
         cmocka_unit_test(test_timing_escapes),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);

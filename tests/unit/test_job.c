@@ -244,7 +244,7 @@ static void test_error_malformed_yaml(void **state)
     struct rb_err err = RB_ERR_INIT;
     assert_int_equal(rb_job_load(JOBS "/bad_syntax.yaml", NULL, 0, &job, &err), RB_E_PARSE);
     assert_string_equal(err.msg, JOBS "/bad_syntax.yaml:3:7: did not find expected ',' or ']' "
-                                 "while parsing a flow sequence");
+                                      "while parsing a flow sequence");
     assert_null(job);
 
     expect_error("scene: empty.gltf\n  bad: indent\n", NULL, 0, RB_E_PARSE,
@@ -292,8 +292,8 @@ static void test_error_wrong_type(void **state)
                  "job.yaml:2:9: 'camera' expects a mapping");
     expect_error("scene: empty.gltf\nanimation: {clips: [a, [b]]}\n", NULL, 0, RB_E_PARSE,
                  "job.yaml:2:24: 'animation.clips' expects a list of strings");
-    expect_error("scene: empty.gltf\nlights: [{type: spot, color: [1, 1]}]\n", NULL, 0,
-                 RB_E_PARSE, "job.yaml:2:30: 'lights[0].color' expects a list of 3 numbers");
+    expect_error("scene: empty.gltf\nlights: [{type: spot, color: [1, 1]}]\n", NULL, 0, RB_E_PARSE,
+                 "job.yaml:2:30: 'lights[0].color' expects a list of 3 numbers");
     expect_error("scene: [a, b]\n", NULL, 0, RB_E_PARSE, "job.yaml:1:8: 'scene' expects a path");
 }
 
@@ -352,8 +352,8 @@ static void test_error_missing_files(void **state)
     struct rb_job *job = NULL;
     struct rb_err err = RB_ERR_INIT;
     assert_int_equal(rb_job_load(JOBS "/missing_scene.yaml", NULL, 0, &job, &err), RB_E_IO);
-    assert_string_equal(err.msg, JOBS "/missing_scene.yaml:2:8: scene file '" JOBS
-                                      "/nope.glb' not found");
+    assert_string_equal(err.msg,
+                        JOBS "/missing_scene.yaml:2:8: scene file '" JOBS "/nope.glb' not found");
     assert_null(job);
 
     expect_error("scene: empty.gltf\nenvironment: {map: nope.exr}\n", NULL, 0, RB_E_IO,
@@ -365,10 +365,10 @@ static void test_error_missing_files(void **state)
 static void test_error_duplicate_key(void **state)
 {
     (void)state;
-    expect_error("scene: empty.gltf\nresolution: [1, 1]\nscene: empty.gltf\n", NULL, 0,
-                 RB_E_PARSE, "job.yaml:3:1: duplicate key 'scene'");
-    expect_error("scene: empty.gltf\nframes: {start: 1, end: 4, start: 2}\n", NULL, 0,
-                 RB_E_PARSE, "job.yaml:2:28: duplicate key 'start' in 'frames'");
+    expect_error("scene: empty.gltf\nresolution: [1, 1]\nscene: empty.gltf\n", NULL, 0, RB_E_PARSE,
+                 "job.yaml:3:1: duplicate key 'scene'");
+    expect_error("scene: empty.gltf\nframes: {start: 1, end: 4, start: 2}\n", NULL, 0, RB_E_PARSE,
+                 "job.yaml:2:28: duplicate key 'start' in 'frames'");
 }
 
 static void test_error_camera(void **state)
@@ -406,15 +406,15 @@ static void test_overrides(void **state)
     const char *text = "scene: empty.gltf\nframes: {start: 0, end: 9, rate: 25}\n"
                        "lights: [{type: point}, {type: spot}]\n";
     struct rb_job_override set[] = {
-        {"integrator.direct.shadow_size", "512"},       /* nested scalar */
-        {"resolution", "[320, 200]"},                  /* list */
-        {"frames", "{start: 1, end: 4}"},              /* mapping: merges, rate stays */
-        {"integrator.name", "reference"},              /* enum */
-        {"scene_lights", "false"},                     /* bool */
+        {"integrator.direct.shadow_size", "512"}, /* nested scalar */
+        {"resolution", "[320, 200]"},             /* list */
+        {"frames", "{start: 1, end: 4}"},         /* mapping: merges, rate stays */
+        {"integrator.name", "reference"},         /* enum */
+        {"scene_lights", "false"},                /* bool */
         {"lights", "[{type: directional, direction: [0, 0, -3]}]"}, /* replaces the list */
         {"animation.clips", "[Run]"},
         {"camera.node", "Cam"},
-        {"camera.node", ""}, /* an empty value unsets an optional string */
+        {"camera.node", ""},            /* an empty value unsets an optional string */
         {"environment.map", "sky.hdr"}, /* relative to the job's directory */
     };
     struct rb_job *job = must_parse(text, set, sizeof(set) / sizeof(set[0]));
@@ -436,8 +436,8 @@ static void test_overrides(void **state)
     rb_job_destroy(job);
 
     /* Overrides apply in order: the last one wins; an empty list clears. */
-    struct rb_job_override order[] = {{"frames.rate", "30"}, {"frames.rate", "48"},
-                                      {"lights", "[]"}};
+    struct rb_job_override order[] = {
+        {"frames.rate", "30"}, {"frames.rate", "48"}, {"lights", "[]"}};
     job = must_parse(text, order, 3);
     assert_float_equal(job->rate_fps, 48, 0);
     assert_int_equal(job->light_count, 0);
@@ -482,8 +482,7 @@ static void test_override_errors(void **state)
                  conflict, 1, RB_E_INVALID,
                  "--set:1:13: 'camera.node' and 'camera.keys' are mutually exclusive");
     struct rb_job_override missing[] = {{"scene", "nope.glb"}};
-    expect_error(text, missing, 1, RB_E_IO,
-                 "--set:1:7: scene file '" JOBS "/nope.glb' not found");
+    expect_error(text, missing, 1, RB_E_IO, "--set:1:7: scene file '" JOBS "/nope.glb' not found");
 }
 
 /* ---- quick look at a glTF ------------------------------------------------------------------ */
@@ -582,8 +581,7 @@ static void test_hash(void **state)
     };
     for (size_t i = 0; i < sizeof(changes) / sizeof(changes[0]); i++) {
         if (hash_of(text, changes[i], 1) == base)
-            fail_msg("--set %s=%s did not change the hash", changes[i][0].key,
-                     changes[i][0].value);
+            fail_msg("--set %s=%s did not change the hash", changes[i][0].key, changes[i][0].value);
     }
 
     /* rb_job_rehash follows a caller's change, and is what the parser computed. */
