@@ -419,8 +419,11 @@ struct backend {
 static bool on_reference_pass(void *user, uint32_t done, uint32_t total)
 {
     const struct backend *b = user;
-    if (b->tty && !b->quiet)
-        fprintf(stderr, "\r  %u/%u samples ", done, total);
+    if (b->tty && !b->quiet) {
+        char line[80];
+        snprintf(line, sizeof(line), "  %u/%u samples", done, total);
+        fprintf(stderr, "\r%-66s", line); /* pad over the frame bar */
+    }
     return !interrupted;
 }
 
