@@ -623,6 +623,14 @@ static int run(struct options *o, int argc, char **argv)
                 progress(b.tty, done, total, f, 0.0, true);
             continue;
         }
+        if (o->resume) {
+            unsigned stale = rb_io_remove_stale_temps(path);
+            if (stale)
+                rb_log(RB_LOG_INFO,
+                       "frame %d: removed %u temporary file(s) of an interrupted "
+                       "run",
+                       f, stale);
+        }
         double t0 = now_s();
         struct frame r;
         if ((st = backend_render(&b, f, &r, &err)) || (st = rb_io_make_parent_dirs(path, &err)) ||

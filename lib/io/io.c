@@ -7,6 +7,7 @@
 #include "io/oiio_shim.h"
 
 #include <errno.h>
+#include <glob.h>
 #include <fcntl.h>
 #include <limits.h>
 #include <math.h>
@@ -133,6 +134,30 @@ enum rb_status rb_io_make_parent_dirs(const char *path, struct rb_err *err)
 out:
     free(dir);
     return st;
+}
+
+unsigned rb_io_remove_stale_temps(const char *path)
+{
+    /* "<stem>.*.tmp.*" covers the frame and its sidecars: a/f.0003.exr.tmp.N.exr,
+     * a/f.0003.timing.json.tmp.N, a/f.0003.png.tmp.N.png. */
+    size_t n = strlen(path);
+    const char *slash = strrchr(path, '/');
+    const char *dot = strrchr(path, '.');
+    int stem = (int)(dot && (!slash || dot > slash) ? (size_t)(dot - path) : n);
+    char *pattern = malloc(n + 16);
+    if (!pattern)
+        return 0;
+    snprintf(pattern, n + 16, "%.*s.*.tmp.*", stem, path);
+    unsigned removed = 0;
+    glob_t g;
+    if (glob(pattern, GLOB_NOSORT, NULL, &g) == 0) {
+        for (size_t i = 0; i < g.gl_pathc; i++)
+            if (unlink(g.gl_pathv[i]) == 0)
+                removed++;
+        globfree(&g);
+    }
+    free(pattern);
+    return removed;
 }
 
 /* "<path>.tmp.<pid><ext>": beside path, so the final rename stays on one file system. */

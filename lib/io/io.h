@@ -24,6 +24,12 @@ enum rb_status rb_io_make_parent_dirs(const char *path, struct rb_err *err);
 enum rb_status rb_io_write_atomic(const char *path, const void *data, size_t size,
                                   struct rb_err *err);
 
+/* Removes the temporary files a killed writer of path (or of its sidecars) left behind:
+ * "<stem>.*.tmp.*" beside it, stem being path without its extension. Returns how many. For
+ * --resume, which renders the frame again; a writer still running on the same output would lose its
+ * temporary file, so two renders must not share an output pattern. */
+unsigned rb_io_remove_stale_temps(const char *path);
+
 /* ---- EXR -------------------------------------------------------------------------------- */
 
 /* A group of channels. name NULL or "" is the beauty (channels R,G,B,A); otherwise channels are

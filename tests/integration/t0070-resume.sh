@@ -20,8 +20,12 @@ check "the killed run did not finish" test ! -e "$T/killed/frame.0011.timing.jso
 before=$(ls "$T/killed"/*.exr 2>/dev/null | wc -l)
 check "the killed run left some complete frames" test "$before" -ge 1
 
+# A temporary file as a killed writer leaves it (whether or not this kill left one).
+: >"$T/killed/frame.0009.exr.tmp.4242.exr"
 rb render jobs/demo.yaml --out "$T/killed" $args --resume
 expect_exit 0 "--resume completes the sequence"
+check "--resume removes temporary files of the interrupted run" \
+    sh -c "! ls '$T/killed' | grep -q '\.tmp\.'"
 for f in 0000 0001 0002 0003 0004 0005 0006 0007 0008 0009 0010 0011; do
     check "frame $f identical to the uninterrupted run" cmp -s "$T/whole/frame.$f.exr" "$T/killed/frame.$f.exr"
 done
