@@ -374,10 +374,14 @@ static enum rb_status write_preview(const char *exr_path, const struct rb_job *j
     enum rb_status st = rb_io_sidecar_path(exr_path, ".png", path, sizeof(path), err);
     if (st)
         return st;
+    /* Opaque: the beauty's colour already holds the environment where alpha is 0, and a
+     * preview shows what the camera sees. */
     size_t n = (size_t)r->width_px * r->height_px;
-    for (size_t i = 0; i < n; i++)
-        for (int c = 0; c < 4; c++)
+    for (size_t i = 0; i < n; i++) {
+        for (int c = 0; c < 3; c++)
             scratch[i * 4 + c] = r->pixels[i * RB_OUT_FLOATS + RB_OUT_BEAUTY + c];
+        scratch[i * 4 + 3] = 1.0f;
+    }
     struct rb_io_color_desc cd = {job->color.config, job->color.display, job->color.view};
     return rb_io_preview_write(path, r->width_px, r->height_px, scratch, &cd, err);
 }

@@ -40,6 +40,9 @@ else
     not_ok "ociocheck passes on the bundled config" "$(tail -n 20 "$T/ociocheck")"
 fi
 
+# Previews are opaque: they show what the camera sees, background included.
+tap_run "$BUILD/tests/tools/exrstat" "$T/demo/frame.0000.png" A 0.999
+
 # The picture is not empty: the room is lit.
 tap_run "$BUILD/tests/tools/exrstat" "$T/demo/frame.0000.exr" R 0.01
 done_testing
