@@ -61,7 +61,7 @@ DEPS := $(LIB_OBJ:.o=.d) $(CMD_OBJ:.o=.d) $(UNIT_BIN:=.d) $(TOOL_BIN:=.d) \
 
 DEPS_STAMP := $(BUILD)/.deps-ok
 
-.PHONY: all test check bench demo install uninstall clean lint format update-golden deps
+.PHONY: all test check bench demo install uninstall clean lint format deps fuzz
 .SECONDARY: $(SPV_H)
 all: $(BUILD)/raybundle
 
@@ -120,7 +120,32 @@ $(BUILD)/mkdemo: tools/mkdemo.c $(BUILD)/.flags
 	@echo "  CC      $@"
 	$(Q)$(CC) -std=c11 $(WARN) $(CFLAGS) -o $@ $< -lm
 
-test check: $(BUILD)/raybundle $(BUILD)/mkdemo $(UNIT_BIN) $(TOOL_BIN)
+# Fuzz targets: replayed over their committed corpus in `make check` (any compiler), and run
+# under libFuzzer by `make fuzz` (clang; FUZZ_SECONDS each).
+FUZZ_SRC := $(sort $(wildcard tests/fuzz/fuzz_*.c))
+FUZZ_REPLAY := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/tests/fuzz/%)
+FUZZ_SECONDS ?= 60
+
+$(BUILD)/tests/fuzz/%: tests/fuzz/%.c $(BUILD)/libraybundle.a $(BUILD)/.flags
+	@mkdir -p $(dir $@)
+	@echo "  FUZZ    $@"
+	$(Q)$(CC) $(ALL_CPPFLAGS) -DRB_FUZZ_REPLAY $(ALL_CFLAGS) $(ALL_LDFLAGS) -o $@ $< \
+		$(BUILD)/libraybundle.a $(PKG_LIBS) -lstdc++
+
+fuzz:
+	$(Q)$(MAKE) --no-print-directory BUILD=$(BUILD)-fuzz CC=clang CXX=clang++ \
+		SANITIZE=1 CFLAGS="-O1 -g -fsanitize=fuzzer-no-link" \
+		CXXFLAGS="-O1 -g -fsanitize=fuzzer-no-link" $(BUILD)-fuzz/libraybundle.a
+	$(Q)for f in $(FUZZ_SRC); do \
+		name=$$(basename $$f .c); corpus=tests/fuzz/corpus/$${name#fuzz_}; \
+		clang $(ALL_CPPFLAGS) -g -O1 -fsanitize=fuzzer,address,undefined -o $(BUILD)-fuzz/$$name \
+			$$f $(BUILD)-fuzz/libraybundle.a $(PKG_LIBS) -lstdc++ && \
+		mkdir -p $(BUILD)-fuzz/corpus-$$name && \
+		$(BUILD)-fuzz/$$name -max_total_time=$(FUZZ_SECONDS) $(BUILD)-fuzz/corpus-$$name \
+			$$corpus || exit 1; \
+	done
+
+test check: $(BUILD)/raybundle $(BUILD)/mkdemo $(UNIT_BIN) $(TOOL_BIN) $(FUZZ_REPLAY)
 	$(Q)BUILD=$(BUILD) tests/run.sh
 
 bench: $(BUILD)/raybundle
@@ -145,13 +170,10 @@ lint:
 	$(Q)FORMAT_SRC="$(FORMAT_SRC)" tests/lint.sh
 
 FORMAT_SRC = $(LIB_C) $(LIB_CXX) $(CMD_C) $(wildcard lib/*/*.h cmd/*.h) $(UNIT_SRC) $(TOOL_SRC) \
-	tools/mkdemo.c
+	$(FUZZ_SRC) tools/mkdemo.c
 
 format:
 	$(Q)clang-format -i $(FORMAT_SRC)
-
-update-golden: $(BUILD)/raybundle
-	$(Q)BUILD=$(BUILD) tests/update-golden.sh
 
 clean:
 	rm -rf $(BUILD)

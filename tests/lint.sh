@@ -45,7 +45,7 @@ for f in cmd/*.c; do
 done
 # Formatting: .clang-format, as `make format` applies it.
 if [ -z "${FORMAT_SRC:-}" ]; then
-    FORMAT_SRC=$(ls lib/*/*.c lib/*/*.cpp lib/*/*.h cmd/*.c cmd/*.h tests/unit/*.c tests/tools/*.c \
+    FORMAT_SRC=$(ls lib/*/*.c lib/*/*.cpp lib/*/*.h cmd/*.c cmd/*.h tests/unit/*.c tests/tools/*.c tests/fuzz/*.c \
         tools/mkdemo.c 2>/dev/null)
 fi
 # shellcheck disable=SC2086
