@@ -138,8 +138,10 @@ fuzz:
 		CXXFLAGS="-O1 -g -fsanitize=fuzzer-no-link" $(BUILD)-fuzz/libraybundle.a
 	$(Q)for f in $(FUZZ_SRC); do \
 		name=$$(basename $$f .c); corpus=tests/fuzz/corpus/$${name#fuzz_}; \
-		clang $(ALL_CPPFLAGS) -g -O1 -fsanitize=fuzzer,address,undefined -o $(BUILD)-fuzz/$$name \
-			$$f $(BUILD)-fuzz/libraybundle.a $(PKG_LIBS) -lstdc++ && \
+		clang $(ALL_CPPFLAGS) -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -c \
+			-o $(BUILD)-fuzz/$$name.o $$f && \
+		clang++ -fsanitize=fuzzer,address,undefined -o $(BUILD)-fuzz/$$name \
+			$(BUILD)-fuzz/$$name.o $(BUILD)-fuzz/libraybundle.a $(PKG_LIBS) && \
 		mkdir -p $(BUILD)-fuzz/corpus-$$name && \
 		$(BUILD)-fuzz/$$name -max_total_time=$(FUZZ_SECONDS) $(BUILD)-fuzz/corpus-$$name \
 			$$corpus || exit 1; \

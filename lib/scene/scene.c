@@ -77,7 +77,9 @@ const char *rb_scene_label(char *buf, size_t size, const char *kind, const char 
 
 static bool grow(void **p, size_t *cap, size_t need, size_t elem)
 {
-    if (need <= *cap)
+    /* Always leave an allocation behind, even for need == 0: callers index past the current
+     * count (array + count), which is undefined on a null pointer even with nothing to add. */
+    if (need <= *cap && *p)
         return true;
     size_t n = *cap ? *cap : 256;
     while (n < need) {
