@@ -61,6 +61,17 @@ agree() { # agree NAME JOB ARGS...
 }
 F=0005
 agree demo jobs/demo.yaml --size 320x180 --frames 5
+# The G-buffer layers come from the same geometry on both sides: skinning, morphs, node
+# animation, the camera and its motion (frame 5 moves) all agree away from the same edges.
+for layer in depth motion normal albedo; do
+    rb compare "$T/demo-gpu/frame.$F.exr" "$T/demo-ref/frame.$F.exr" --layer $layer \
+        --mask "$T/demo-mask.exr" --max-rmse 1e-3
+    expect_exit 0 "demo: the $layer layers agree within RMSE 1e-3 ($(grep '^rmse' "$T/stdout" | tr -s ' '))"
+done
+maxmotion=$(oiiotool "$T/demo-gpu/frame.$F.exr" --ch motion.X,motion.Y --abs --printstats 2>&1 |
+    sed -n 's/.*Stats Max: *\([0-9.]*\) *\([0-9.]*\).*/\1 \2/p')
+check "demo: motion vectors are not all zero (max |x| |y|: $maxmotion px)" \
+    awk -v m="$maxmotion" 'BEGIN { split(m, a, " "); exit !(a[1] + a[2] > 0.5) }'
 "$BUILD/tests/tools/analytic" scene "$T" || not_ok "analytic scene written"
 cat >"$T/point.yaml" <<YAML
 scene: plane.gltf
