@@ -10,8 +10,8 @@ expect_exit 0 "uninterrupted run renders frames 0-11"
 "$RB" render jobs/demo.yaml --out "$T/killed" $args 2>/dev/null &
 pid=$!
 i=0
-while [ ! -e "$T/killed/frame.0003.timing.json" ] && [ $i -lt 600 ]; do
-    sleep 0.1
+while [ ! -e "$T/killed/frame.0003.timing.json" ] && [ $i -lt 1200 ]; do
+    sleep 0.05
     i=$((i + 1))
 done
 kill -KILL $pid 2>/dev/null
