@@ -5,6 +5,9 @@
 #include <stdio.h>
 
 #include "gpu/gpu.h"
+#include "io/io.h"
+#include "job/job.h"
+#include "reference/reference.h"
 
 static void usage(FILE *f)
 {
@@ -32,6 +35,8 @@ int cmd_info(int argc, char **argv)
         return RB_EXIT_USAGE;
     }
     printf("raybundle %s\n", RB_VERSION);
+    printf("libraries: %s, Embree %s, libyaml %s\n", rb_io_library_versions(),
+           rb_reference_embree_version(), rb_job_yaml_version());
     struct rb_err err = RB_ERR_INIT;
     if (rb_gpu_print_devices(stdout, &err)) {
         cmd_error("%s", err.msg);

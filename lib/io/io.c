@@ -552,6 +552,14 @@ static bool file_exists(const char *path)
     return stat(path, &sb) == 0 && S_ISREG(sb.st_mode);
 }
 
+const char *rb_io_library_versions(void)
+{
+    static char buf[128];
+    snprintf(buf, sizeof(buf), "OpenImageIO %s, OpenColorIO %s", rb_oiio_version(),
+             rb_ocio_version());
+    return buf;
+}
+
 const char *rb_io_default_ocio_config(void)
 {
     /* Not thread-safe: one static buffer, rebuilt on each call. */

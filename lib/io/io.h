@@ -94,6 +94,10 @@ enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t
                                    const float *rgba, const struct rb_io_color_desc *desc,
                                    struct rb_err *err);
 
+/* The versions of the image and colour libraries, e.g. "OpenImageIO 2.4.7, OpenColorIO 2.1.2"
+ * (for `raybundle info` and bug reports). */
+const char *rb_io_library_versions(void);
+
 /* The bundled OCIO config (installed with the binary; the source tree's when run from it). */
 const char *rb_io_default_ocio_config(void);
 

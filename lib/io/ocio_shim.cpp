@@ -57,6 +57,11 @@ void copy_name(char *dst, size_t size, const char *src)
 
 } // namespace
 
+extern "C" const char *rb_ocio_version(void) noexcept
+{
+    return OCIO::GetVersion();
+}
+
 extern "C" int rb_ocio_display_view_apply(const char *config_path, const char *display,
                                           const char *view, float *rgba, uint32_t width_px,
                                           uint32_t height_px, char *display_out, char *view_out,

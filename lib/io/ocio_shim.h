@@ -27,6 +27,9 @@ extern "C" {
 /* Transforms width*height RGBA float pixels in place from the config's scene_linear role to
  * display/view. display NULL or "": the config's default display; view NULL or "": that
  * display's default view. The resolved names are copied to display_out/view_out when given. */
+/* OpenColorIO's version, e.g. "2.1.2". */
+const char *rb_ocio_version(void) RB_SHIM_NOEXCEPT;
+
 int rb_ocio_display_view_apply(const char *config_path, const char *display, const char *view,
                                float *rgba, uint32_t width_px, uint32_t height_px,
                                char *display_out, char *view_out, size_t name_size, char *msg,

@@ -55,6 +55,11 @@ struct rb_oiio_input {
     OIIO::ImageSpec spec;
 };
 
+extern "C" const char *rb_oiio_version(void) noexcept
+{
+    return OIIO_VERSION_STRING;
+}
+
 extern "C" int rb_oiio_write(const struct rb_oiio_write_desc *d, char *msg,
                              size_t msg_size) noexcept
 {

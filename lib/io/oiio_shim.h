@@ -56,6 +56,9 @@ struct rb_oiio_write_desc {
 };
 
 /* Writes one image (one part, scanlines) exactly as described. */
+/* OpenImageIO's version, e.g. "2.4.7". */
+const char *rb_oiio_version(void) RB_SHIM_NOEXCEPT;
+
 int rb_oiio_write(const struct rb_oiio_write_desc *desc, char *msg,
                   size_t msg_size) RB_SHIM_NOEXCEPT;
 

@@ -1309,6 +1309,11 @@ void rb_job_destroy(struct rb_job *job)
     free(job);
 }
 
+const char *rb_job_yaml_version(void)
+{
+    return yaml_get_version_string();
+}
+
 const char *rb_integrator_name(enum rb_integrator_kind kind)
 {
     if (kind == RB_INTEGRATOR_DEFAULT)

@@ -141,6 +141,9 @@ void rb_job_rehash(struct rb_job *job);
 
 void rb_job_destroy(struct rb_job *job);
 
+/* libyaml's version, e.g. "0.2.5". */
+const char *rb_job_yaml_version(void);
+
 const char *rb_integrator_name(enum rb_integrator_kind kind);
 /* Returns RB_INTEGRATOR_DEFAULT when name is unknown. */
 enum rb_integrator_kind rb_integrator_from_name(const char *name);

@@ -144,3 +144,8 @@ void rb_ref_offset(const float p[3], const float n[3], float out[3])
         out[i] = fabsf(p[i]) < origin ? p[i] + float_scale * n[i] : pi;
     }
 }
+
+const char *rb_reference_embree_version(void)
+{
+    return RTC_VERSION_STRING;
+}

@@ -51,6 +51,9 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame,
 
 void rb_reference_destroy(struct rb_reference *ref);
 
+/* Embree's version, e.g. "3.13.5". */
+const char *rb_reference_embree_version(void);
+
 /* ---- shading model, shared with the tests ------------------------------------------------ */
 
 /* The glTF BRDF exactly as shaders/common/brdf.glsl evaluates it (f, without the cosine), for

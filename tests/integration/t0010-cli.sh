@@ -45,6 +45,7 @@ rb info
 expect_exit 0 "info exits 0"
 check "info lists lavapipe" grep -q 'llvmpipe' "$T/stdout"
 check "info reports the driver" grep -q 'driver:' "$T/stdout"
+check "info reports the library versions" grep -q '^libraries: OpenImageIO [0-9].*, OpenColorIO [0-9].*, Embree [0-9].*, libyaml [0-9]' "$T/stdout"
 check "info says whether a device is usable" grep -q 'usable: yes' "$T/stdout"
 
 rb help job
