@@ -1,0 +1,139 @@
+/* lib/core: error messages and their context, string helpers, FNV-1a, reading files, logging. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "core/core.h"
+
+static void test_errf_and_prefix(void **state)
+{
+    (void)state;
+    struct rb_err err = RB_ERR_INIT;
+    assert_int_equal(rb_errf(&err, RB_E_IO, "cannot open '%s': %s", "a.exr", "No such file"),
+                     RB_E_IO);
+    assert_int_equal(err.status, RB_E_IO);
+    assert_string_equal(err.msg, "cannot open 'a.exr': No such file");
+    rb_err_prefix(&err, "frame %d", 12);
+    assert_string_equal(err.msg, "frame 12: cannot open 'a.exr': No such file");
+    /* NULL err is allowed: the status still comes back. */
+    assert_int_equal(rb_errf(NULL, RB_E_PARSE, "x"), RB_E_PARSE);
+    rb_err_prefix(NULL, "ignored");
+    /* A message longer than the buffer is cut, never overrun, and stays terminated. */
+    char long_text[2048];
+    memset(long_text, 'x', sizeof(long_text) - 1);
+    long_text[sizeof(long_text) - 1] = '\0';
+    rb_errf(&err, RB_E_INVALID, "%s", long_text);
+    assert_int_equal(strlen(err.msg), sizeof(err.msg) - 1);
+    rb_err_prefix(&err, "context");
+    assert_int_equal(strlen(err.msg), sizeof(err.msg) - 1);
+    assert_memory_equal(err.msg, "context: xxx", 12);
+}
+
+static void test_status_names(void **state)
+{
+    (void)state;
+    for (int s = RB_OK; s <= RB_E_OVERFLOW; s++) {
+        const char *name = rb_status_name((enum rb_status)s);
+        assert_non_null(name);
+        assert_string_not_equal(name, "unknown status");
+    }
+    assert_string_equal(rb_status_name((enum rb_status)999), "unknown status");
+}
+
+static void test_strings(void **state)
+{
+    (void)state;
+    char buf[4];
+    assert_int_equal(rb_strlcpy(buf, "abcdef", sizeof(buf)), 6);
+    assert_string_equal(buf, "abc");
+    assert_int_equal(rb_strlcpy(buf, "ab", sizeof(buf)), 2);
+    assert_string_equal(buf, "ab");
+    assert_null(rb_strdup(NULL));
+    char *d = rb_strdup("raybundle");
+    assert_string_equal(d, "raybundle");
+    free(d);
+}
+
+static void test_hash(void **state)
+{
+    (void)state;
+    /* FNV-1a 64 reference values: the empty string is the offset basis. */
+    assert_true(rb_hash64("", 0, RB_HASH_SEED) == 0xcbf29ce484222325ull);
+    assert_true(rb_hash64("a", 1, RB_HASH_SEED) == 0xaf63dc4c8601ec8cull);
+    assert_true(rb_hash64("foobar", 6, RB_HASH_SEED) == 0x85944171f73967e8ull);
+    /* Chaining equals hashing the concatenation. */
+    uint64_t h = rb_hash64("foo", 3, RB_HASH_SEED);
+    assert_true(rb_hash64("bar", 3, h) == rb_hash64("foobar", 6, RB_HASH_SEED));
+}
+
+static void test_read_file(void **state)
+{
+    (void)state;
+    char path[] = "/tmp/rb-core-XXXXXX";
+    int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    /* Larger than the first read block, with a NUL inside. */
+    size_t n = 200000;
+    char *data = malloc(n);
+    for (size_t i = 0; i < n; i++)
+        data[i] = (char)(i * 7);
+    assert_int_equal(write(fd, data, n), (ssize_t)n);
+    close(fd);
+    char *got = NULL;
+    size_t size = 0;
+    struct rb_err err = RB_ERR_INIT;
+    assert_int_equal(rb_read_file(path, &got, &size, &err), RB_OK);
+    assert_int_equal(size, n);
+    assert_memory_equal(got, data, n);
+    assert_int_equal(got[n], '\0');
+    free(got);
+    free(data);
+    unlink(path);
+    assert_int_equal(rb_read_file(path, &got, &size, &err), RB_E_IO);
+    assert_non_null(strstr(err.msg, path));
+}
+
+static char logged[256];
+static enum rb_log_level logged_level;
+
+static void sink(enum rb_log_level level, const char *msg, void *user)
+{
+    (void)user;
+    logged_level = level;
+    rb_strlcpy(logged, msg, sizeof(logged));
+}
+
+static void test_log(void **state)
+{
+    (void)state;
+    rb_log_set_sink(sink, NULL);
+    enum rb_log_level old = rb_log_get_level();
+    rb_log_set_level(RB_LOG_WARN);
+    unsigned warnings = rb_log_warning_count();
+    logged[0] = '\0';
+    rb_log(RB_LOG_INFO, "hidden %d", 1);
+    assert_string_equal(logged, "");
+    rb_log(RB_LOG_WARN, "shown %d", 2);
+    assert_string_equal(logged, "shown 2");
+    assert_int_equal(logged_level, RB_LOG_WARN);
+    assert_int_equal(rb_log_warning_count(), warnings + 1);
+    rb_log_set_level(old);
+    rb_log_set_sink(NULL, NULL);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_errf_and_prefix), cmocka_unit_test(test_status_names),
+        cmocka_unit_test(test_strings),         cmocka_unit_test(test_hash),
+        cmocka_unit_test(test_read_file),       cmocka_unit_test(test_log),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
