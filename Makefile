@@ -126,10 +126,10 @@ FUZZ_SRC := $(sort $(wildcard tests/fuzz/fuzz_*.c))
 FUZZ_REPLAY := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/tests/fuzz/%)
 FUZZ_SECONDS ?= 60
 
-$(BUILD)/tests/fuzz/%: tests/fuzz/%.c $(BUILD)/libraybundle.a $(BUILD)/.flags
+$(BUILD)/tests/fuzz/%: tests/fuzz/%.c tests/fuzz/replay.c $(BUILD)/libraybundle.a $(BUILD)/.flags
 	@mkdir -p $(dir $@)
 	@echo "  FUZZ    $@"
-	$(Q)$(CC) $(ALL_CPPFLAGS) -DRB_FUZZ_REPLAY $(ALL_CFLAGS) $(ALL_LDFLAGS) -o $@ $< \
+	$(Q)$(CC) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(ALL_LDFLAGS) -o $@ $< tests/fuzz/replay.c \
 		$(BUILD)/libraybundle.a $(PKG_LIBS) -lstdc++
 
 fuzz:
@@ -172,7 +172,7 @@ lint:
 	$(Q)FORMAT_SRC="$(FORMAT_SRC)" tests/lint.sh
 
 FORMAT_SRC = $(LIB_C) $(LIB_CXX) $(CMD_C) $(wildcard lib/*/*.h cmd/*.h) $(UNIT_SRC) $(TOOL_SRC) \
-	$(FUZZ_SRC) tools/mkdemo.c
+	$(wildcard tests/fuzz/*.c) tools/mkdemo.c
 
 format:
 	$(Q)clang-format -i $(FORMAT_SRC)

@@ -43,28 +43,3 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     return 0;
 }
-
-#ifdef RB_FUZZ_REPLAY
-/* One TAP line for the whole corpus; each input is named first, so a crash names its input. */
-int main(int argc, char **argv)
-{
-    int failed = 0;
-    for (int i = 1; i < argc; i++) {
-        char *data = NULL;
-        size_t size = 0;
-        struct rb_err err = RB_ERR_INIT;
-        printf("# %s\n", argv[i]);
-        fflush(stdout);
-        if (rb_read_file(argv[i], &data, &size, &err)) {
-            printf("# %s\n", err.msg);
-            failed++;
-            continue;
-        }
-        LLVMFuzzerTestOneInput((const uint8_t *)data, size);
-        free(data);
-    }
-    printf("%s 1 - %d corpus inputs replayed without a crash (%d unreadable)\n1..1\n",
-           failed || argc < 2 ? "not ok" : "ok", argc - 1, failed);
-    return failed || argc < 2;
-}
-#endif

@@ -19,6 +19,8 @@
 
 #include <cmocka.h>
 
+#include "testutil.h"
+
 #define W 8
 #define H 6
 #define N (W * H)
@@ -34,42 +36,16 @@ static void check_near(double a, double b, double tol, const char *expr, const c
         fail_msg("%s:%d: %s is %.17g, want %.17g (within %g)", file, line, expr, a, b, tol);
 }
 
-static void rm_rf(const char *path)
-{
-    struct stat st;
-    if (lstat(path, &st) != 0)
-        return;
-    if (S_ISDIR(st.st_mode)) {
-        DIR *d = opendir(path);
-        if (d) {
-            struct dirent *e;
-            while ((e = readdir(d))) {
-                if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
-                    continue;
-                char sub[1024];
-                snprintf(sub, sizeof(sub), "%s/%s", path, e->d_name);
-                rm_rf(sub);
-            }
-            closedir(d);
-        }
-        rmdir(path);
-    } else {
-        unlink(path);
-    }
-}
-
 static int group_setup(void **state)
 {
     (void)state;
-    const char *base = getenv("TMPDIR");
-    snprintf(tmpdir, sizeof(tmpdir), "%s/rb_test_compare.XXXXXX", base && *base ? base : "/tmp");
-    return mkdtemp(tmpdir) ? 0 : -1;
+    return rb_test_mkdtemp(tmpdir, sizeof(tmpdir), "compare");
 }
 
 static int group_teardown(void **state)
 {
     (void)state;
-    rm_rf(tmpdir);
+    rb_test_rm_rf(tmpdir);
     return 0;
 }
 

@@ -3,6 +3,7 @@
  * Every file goes under one mkdtemp directory; run from the repository root (the preview
  * tests use share/ocio/config.ocio). */
 #include "io/io.h"
+#include "testutil.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -27,42 +28,16 @@ static char tmpdir[512];
 
 /* ---- helpers ---------------------------------------------------------------------------- */
 
-static void rm_rf(const char *path)
-{
-    struct stat st;
-    if (lstat(path, &st) != 0)
-        return;
-    if (S_ISDIR(st.st_mode)) {
-        DIR *d = opendir(path);
-        if (d) {
-            struct dirent *e;
-            while ((e = readdir(d))) {
-                if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
-                    continue;
-                char sub[1024];
-                snprintf(sub, sizeof(sub), "%s/%s", path, e->d_name);
-                rm_rf(sub);
-            }
-            closedir(d);
-        }
-        rmdir(path);
-    } else {
-        unlink(path);
-    }
-}
-
 static int group_setup(void **state)
 {
     (void)state;
-    const char *base = getenv("TMPDIR");
-    snprintf(tmpdir, sizeof(tmpdir), "%s/rb_test_io.XXXXXX", base && *base ? base : "/tmp");
-    return mkdtemp(tmpdir) ? 0 : -1;
+    return rb_test_mkdtemp(tmpdir, sizeof(tmpdir), "io");
 }
 
 static int group_teardown(void **state)
 {
     (void)state;
-    rm_rf(tmpdir);
+    rb_test_rm_rf(tmpdir);
     return 0;
 }
 
