@@ -73,22 +73,10 @@ maxmotion=$(oiiotool "$T/demo-gpu/frame.$F.exr" --ch motion.X,motion.Y --abs --p
 check "demo: motion vectors are not all zero (max |x| |y|: $maxmotion px)" \
     awk -v m="$maxmotion" 'BEGIN { split(m, a, " "); exit !(a[1] + a[2] > 0.5) }'
 "$BUILD/tests/tools/analytic" scene "$T" || not_ok "analytic scene written"
-cat >"$T/point.yaml" <<YAML
-scene: plane.gltf
-output: point/frame.####.exr
-resolution: [320, 200]
-frames: {start: 0, end: 0}
-camera:
-  fov_y_deg: 60
-  keys: [{t: 0, position: [0, 6, 4], look_at: [0, 0, 0]}]
-lights:
-  - {type: point, position: [0, 2, 0], color: [1, 1, 1], intensity: 10}
-  - {type: spot, position: [-2, 2, 0], direction: [0, -1, 0], intensity: 20, inner_cone_deg: 20, outer_cone_deg: 30}
-YAML
 F=0000
-agree analytic "$T/point.yaml"
+agree analytic "$T/lights.yaml"
 # With no emitters and no environment, the full path space at 0 bounces is the same set of paths.
-rb reference "$T/point.yaml" --spp 1 --set integrator.reference.max_bounces=0 --out "$T/full0" -q
+rb reference "$T/lights.yaml" --spp 1 --set integrator.reference.max_bounces=0 --out "$T/full0" -q
 expect_exit 0 "analytic: reference (full path space, 0 bounces) renders"
 rb compare "$T/analytic-gpu/frame.0000.exr" "$T/full0/frame.0000.exr" --mask "$T/analytic-mask.exr" \
     --max-relmse 1e-3

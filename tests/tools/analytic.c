@@ -1,7 +1,10 @@
 /* analytic: the analytic-light test's scene writer and checker.
  *   analytic scene DIR         writes DIR/plane.gltf: a 20 m Lambertian floor (albedo 0.5,
  *                              KHR_materials_specular factor 0) and a 0.5 m occluder quad at
- *                              height 1 centred on (1.5, 1, 0)
+ *                              height 1 centred on (1.5, 1, 0); glossy.gltf and metal.gltf;
+ *                              and the jobs point.yaml, spot.yaml, sun.yaml, glossy.yaml,
+ *                              metal.yaml and lights.yaml (point and spot together), written
+ *                              from the same constants the checks below use
  *   analytic point EXR         checks the point-light render: radiance I cos(theta)/r^2 albedo/pi
  *                              within 1% on lit floor pixels, 0 inside the occluder's shadow
  *   analytic spot EXR          checks the spot-light render: lit inside the inner cone, dark
@@ -200,6 +203,50 @@ static int write_scene(const char *dir, const char *name, double metallic, doubl
         lambert ? ",\"extensions\":{\"KHR_materials_specular\":{\"specularFactor\":0}}" : "",
         sizeof(buf), enc);
     return fclose(f) != 0;
+}
+
+/* One job over scene with this tool's camera, lit by the given `lights:` items. */
+static int write_job(const char *dir, const char *name, const char *scene, const char *lights)
+{
+    char path[4096];
+    snprintf(path, sizeof(path), "%s/%s.yaml", dir, name);
+    FILE *f = fopen(path, "w");
+    if (!f) {
+        perror(path);
+        return 1;
+    }
+    fprintf(f,
+            "scene: %s\n"
+            "output: %s/frame.####.exr\n"
+            "resolution: [320, 200]\n"
+            "frames: {start: 0, end: 0}\n"
+            "camera:\n"
+            "  fov_y_deg: %g\n"
+            "  keys: [{t: 0, position: [%g, %g, %g], look_at: [%g, %g, %g]}]\n"
+            "lights:\n%s",
+            scene, name, fov_y_deg, cam_pos[0], cam_pos[1], cam_pos[2], cam_target[0],
+            cam_target[1], cam_target[2], lights);
+    return fclose(f) != 0;
+}
+
+static int write_jobs(const char *dir)
+{
+    char point[256], spot[256], sun[128], both[512];
+    snprintf(point, sizeof(point),
+             "  - {type: point, position: [%g, %g, %g], color: [1, 1, 1], intensity: %g}\n",
+             point_pos[0], point_pos[1], point_pos[2], point_intensity);
+    snprintf(spot, sizeof(spot),
+             "  - {type: spot, position: [%g, %g, %g], direction: [0, -1, 0], intensity: %g, "
+             "inner_cone_deg: %g, outer_cone_deg: %g}\n",
+             spot_pos[0], spot_pos[1], spot_pos[2], spot_intensity, spot_inner_deg, spot_outer_deg);
+    snprintf(sun, sizeof(sun), "  - {type: directional, direction: [0, -1, 0], intensity: %g}\n",
+             sun_lux);
+    snprintf(both, sizeof(both), "%s%s", point, spot);
+    return write_job(dir, "point", "plane.gltf", point) ||
+           write_job(dir, "spot", "plane.gltf", spot) || write_job(dir, "sun", "plane.gltf", sun) ||
+           write_job(dir, "glossy", "glossy.gltf", point) ||
+           write_job(dir, "metal", "metal.gltf", point) ||
+           write_job(dir, "lights", "plane.gltf", both);
 }
 
 struct image {
@@ -430,7 +477,7 @@ int main(int argc, char **argv)
     if (strcmp(argv[1], "scene") == 0)
         return write_scene(argv[2], "plane.gltf", 0.0, 1.0, 1) ||
                write_scene(argv[2], "glossy.gltf", 0.0, 0.4, 0) ||
-               write_scene(argv[2], "metal.gltf", 1.0, 0.5, 0);
+               write_scene(argv[2], "metal.gltf", 1.0, 0.5, 0) || write_jobs(argv[2]);
     int rc;
     if (strcmp(argv[1], "point") == 0)
         rc = check_point(argv[2]);
