@@ -44,4 +44,14 @@ static inline int rb_test_mkdtemp(char *buf, size_t size, const char *tag)
     return mkdtemp(buf) ? 0 : -1;
 }
 
+/* Writes the path of an external sample scene ($RB_SCENES, default ../shared/scenes) into buf
+ * and returns 0 when the file exists, -1 when it does not: a test that needs it then calls
+ * cmocka's skip(), so a fresh clone without the scenes still passes. */
+static inline int rb_test_scene(char *buf, size_t size, const char *rel)
+{
+    const char *dir = getenv("RB_SCENES");
+    snprintf(buf, size, "%s/%s", dir && *dir ? dir : "../shared/scenes", rel);
+    return access(buf, R_OK) == 0 ? 0 : -1;
+}
+
 #endif
