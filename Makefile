@@ -35,8 +35,9 @@ SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer
 endif
 
 DEPFLAGS = -MMD -MP
-ALL_CPPFLAGS = -Ilib -I$(BUILD)/shaders -Ishaders/common -D_POSIX_C_SOURCE=200809L \
-	-DRB_DATADIR='"$(DATADIR)"' $(CPPFLAGS)
+# DATADIR is not compiled in: the binary finds its data relative to itself (../share/raybundle),
+# so `make install` with another PREFIX installs the same build without rebuilding it.
+ALL_CPPFLAGS = -Ilib -I$(BUILD)/shaders -Ishaders/common -D_POSIX_C_SOURCE=200809L $(CPPFLAGS)
 ALL_CFLAGS = -std=c11 $(WARN) $(DEPFLAGS) $(PKG_CFLAGS) $(SANFLAGS) $(CFLAGS)
 ALL_CXXFLAGS = -std=c++17 $(CXXWARN) $(DEPFLAGS) $(PKG_CFLAGS) $(SANFLAGS) $(CXXFLAGS)
 ALL_LDFLAGS = $(SANFLAGS) $(LDFLAGS)

@@ -3,6 +3,7 @@
 
 #include <getopt.h>
 #include <stdio.h>
+#include <stdlib.h>
 
 #include "gpu/gpu.h"
 #include "io/io.h"
@@ -37,6 +38,8 @@ int cmd_info(int argc, char **argv)
     printf("raybundle %s\n", RB_VERSION);
     printf("libraries: %s, Embree %s, libyaml %s\n", rb_io_library_versions(),
            rb_reference_embree_version(), rb_job_yaml_version());
+    const char *ocio = getenv("OCIO");
+    printf("OpenColorIO config: %s\n", ocio && *ocio ? ocio : rb_io_default_ocio_config());
     struct rb_err err = RB_ERR_INIT;
     if (rb_gpu_print_devices(stdout, &err)) {
         cmd_error("%s", err.msg);

@@ -1,6 +1,7 @@
 /* Files in and out, the C side: frame paths, sidecar names, atomic writes, the EXR channel and
  * metadata policy, the preview's quantization, and the timing sidecar's JSON. The libraries
  * themselves sit behind oiio_shim.cpp and ocio_shim.cpp, which decide nothing. */
+#define _XOPEN_SOURCE 700 /* realpath */
 #include "io/io.h"
 
 #include "io/ocio_shim.h"
@@ -18,9 +19,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#ifndef RB_DATADIR
+/* The last place to look for data: the default prefix's. The binary looks beside itself first
+ * (../share/raybundle), so an install under any prefix finds its own. */
 #define RB_DATADIR "/usr/local/share/raybundle"
-#endif
 
 /* Rec.709 / sRGB primaries and D65 white, as OpenEXR's chromaticities: red, green, blue, white
  * (x, y). */
@@ -582,8 +583,9 @@ const char *rb_io_default_ocio_config(void)
             static const char *const rel[] = {"../share/raybundle/ocio/config.ocio",
                                               "../share/ocio/config.ocio"};
             for (size_t i = 0; i < sizeof(rel) / sizeof(rel[0]); i++) {
-                snprintf(found, sizeof(found), "%s/%s", exe, rel[i]);
-                if (file_exists(found))
+                char path[PATH_MAX + 64];
+                snprintf(path, sizeof(path), "%s/%s", exe, rel[i]);
+                if (file_exists(path) && realpath(path, found))
                     return found;
             }
         }

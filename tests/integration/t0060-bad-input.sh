@@ -24,20 +24,33 @@ resolution: wide"
 bad missing-scene "missing-scene.yaml:1:8:" "scene: nope/missing.glb
 output: out-missing-scene/f.####.exr"
 
-# A corrupt .glb: exit 2, the file named.
-head -c 300 "${RB_SCENES:-../shared/scenes}/Fox/Fox.glb" >"$T/corrupt.glb"
+# A truncated .glb (its header promises 1000 bytes, a 500-byte JSON chunk; the file ends early):
+# exit 2, the file named.
+printf 'glTF\002\000\000\000\350\003\000\000\364\001\000\000JSON{"asset": {"version": "2.0"}, "me' \
+    >"$T/corrupt.glb"
 printf 'scene: corrupt.glb\noutput: out-corrupt/f.####.exr\n' >"$T/corrupt.yaml"
 rb render "$T/corrupt.yaml" -q
 expect_exit 2 "corrupt .glb: exits 2"
 stderr_has "corrupt.glb" "corrupt .glb: the file is named"
 check "corrupt .glb: no output written" test ! -e "$T/out-corrupt"
 
-# A glTF whose texture file is missing: exit 2, the image named.
-sed 's/"uri" *: *"WaterBottle_baseColor.png"/"uri": "missing-basecolor.png"/' \
-    "${RB_SCENES:-../shared/scenes}/WaterBottle/WaterBottle.gltf" >"$T/WaterBottle.gltf"
-cp "${RB_SCENES:-../shared/scenes}/WaterBottle/WaterBottle.bin" "$T/"
-check "the texture fixture references the missing image" grep -q missing-basecolor "$T/WaterBottle.gltf"
-printf 'scene: WaterBottle.gltf\noutput: out-texture/f.####.exr\n' >"$T/texture.yaml"
+# A glTF whose texture file is missing: exit 2, the image named. One textured triangle, its
+# positions and texture coordinates in a data: buffer.
+cat >"$T/textured.gltf" <<'GLTF'
+{"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+ "nodes": [{"mesh": 0}],
+ "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}],
+ "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+ "textures": [{"source": 0}],
+ "images": [{"uri": "missing-basecolor.png"}],
+ "buffers": [{"byteLength": 60, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/"}],
+ "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                 {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
+ "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                "min": [0, 0, 0], "max": [1, 1, 0]},
+               {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}]}
+GLTF
+printf 'scene: textured.gltf\noutput: out-texture/f.####.exr\n' >"$T/texture.yaml"
 rb render "$T/texture.yaml" -q
 expect_exit 2 "missing texture: exits 2"
 stderr_has "missing-basecolor.png" "missing texture: the image is named"

@@ -21,11 +21,19 @@ for exr in "$T"/int/*.exr; do
     check "$(basename "$exr") is complete" sh -c "oiiotool --info '$exr' >/dev/null"
 done
 
+stamp() { ls -l --time-style=+%s.%N "$BUILD/raybundle" "$BUILD/libraybundle.a" "$BUILD/.flags"; }
+stamp >"$T/before"
 make -s install BUILD="$BUILD" PREFIX=/opt/rb DESTDIR="$T/stage" >"$T/install.log" 2>&1
 check "make install succeeds" test $? -eq 0
+stamp >"$T/after"
+check "make install with another PREFIX rebuilds nothing" cmp -s "$T/before" "$T/after"
 for f in opt/rb/bin/raybundle opt/rb/share/man/man1/raybundle.1 \
     opt/rb/share/man/man5/raybundle-job.5 opt/rb/share/raybundle/ocio/config.ocio; do
     check "installs $f" test -f "$T/stage/$f"
 done
 check "the installed binary runs" sh -c "'$T/stage/opt/rb/bin/raybundle' --version >/dev/null"
+# It finds its OpenColorIO config beside itself, wherever the prefix put it.
+"$T/stage/opt/rb/bin/raybundle" info >"$T/info" 2>&1
+check "the installed binary uses the installed OCIO config" \
+    grep -qF "$T/stage/opt/rb/share/raybundle/ocio/config.ocio" "$T/info"
 done_testing
