@@ -17,7 +17,12 @@ int cmd_compare(int argc, char **argv);
 int cmd_info(int argc, char **argv);
 int cmd_help(int argc, char **argv);
 
-/* Prints "raybundle: error: <msg>" to stderr. */
+/* True while a progress line (ending in '\r' updates, no newline) is open on stderr. */
+extern bool cmd_bar_open;
+/* Ends an open progress line with a newline, so what is printed next starts a line. */
+void cmd_end_bar(void);
+
+/* Prints "raybundle: error: <msg>" to stderr (after ending an open progress line). */
 void cmd_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
 #endif

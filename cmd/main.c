@@ -21,9 +21,19 @@ static const struct command commands[] = {
     {"help", cmd_help, "show this list, or 'help job' for every job-file key"},
 };
 
+bool cmd_bar_open;
+
+void cmd_end_bar(void)
+{
+    if (cmd_bar_open)
+        fputc('\n', stderr);
+    cmd_bar_open = false;
+}
+
 void cmd_error(const char *fmt, ...)
 {
     va_list ap;
+    cmd_end_bar();
     va_start(ap, fmt);
     fputs("raybundle: error: ", stderr);
     vfprintf(stderr, fmt, ap);
@@ -36,7 +46,8 @@ static void usage(FILE *f)
     fprintf(f, "usage: raybundle <command> [options] [args]\n\ncommands:\n");
     for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++)
         fprintf(f, "  %-10s %s\n", commands[i].name, commands[i].help);
-    fprintf(f, "\n'raybundle <command> --help' describes a command; see raybundle(1) and "
+    fprintf(f, "\n  --version  print the version and exit\n"
+               "\n'raybundle <command> --help' describes a command; see raybundle(1) and "
                "raybundle-job(5).\n");
 }
 

@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -22,27 +23,40 @@
 
 #define MAX_OVERRIDES 64
 
-static volatile sig_atomic_t interrupted;
+static volatile sig_atomic_t interrupted; /* the signal that asked us to stop, or 0 */
 
-static void on_sigint(int sig)
+static void on_signal(int sig)
 {
-    (void)sig;
-    /* First ^C: finish the frame in flight. Second: stop now (files are renamed into place,
+    /* First SIGINT or SIGTERM: a GPU frame in flight is finished and written; a reference
+     * frame stops sampling and is not written. Second: stop now (files are renamed into place,
      * so none is ever torn). */
     if (interrupted)
-        signal(SIGINT, SIG_DFL), raise(SIGINT);
-    interrupted = 1;
+        signal(sig, SIG_DFL), raise(sig);
+    interrupted = sig;
+}
+
+/* Log lines and errors end an open progress bar's line first. */
+static void log_sink(enum rb_log_level level, const char *msg, void *user)
+{
+    (void)user;
+    static const char *const names[] = {"error", "warning", "info", "debug"};
+    cmd_end_bar();
+    fprintf(stderr, "raybundle: %s: %s\n", names[level], msg);
 }
 
 struct options {
     const char *job_path;
     struct rb_job_override overrides[MAX_OVERRIDES];
     size_t override_count;
-    const char *frames, *size, *output, *out_dir, *integrator, *device;
-    const char *spp, *time_limit, *threads;
+    const char *output, *out_dir, *integrator, *device, *threads;
+    const char *spp, *time_limit; /* as given, for messages */
     bool resume, validate, preview, quiet;
     int verbose;
     const char *command; /* "render" or "reference" */
+    /* Text behind the options that are sugar for --set (--frames, --size, ...). */
+    char frames_start[32], frames_end[32], size_value[48];
+    char frames_origin[64], size_origin[64], integrator_origin[64], spp_origin[64],
+        time_limit_origin[64];
 };
 
 /* One rendered frame, whichever backend made it (the GPU integrators or the CPU reference). */
@@ -74,17 +88,17 @@ static void usage(FILE *f, const char *command)
                    "OpenEXR images with timing sidecars.\n"
                    "\n");
     fprintf(f,
-            "  --frames A-B         render frames A to B (or one frame: A)\n"
-            "  --size WxH           override the resolution\n"
+            "  --frames A-B         render frames A to B (or one frame: A); sets frames.*\n"
+            "  --size WxH           set the resolution\n"
             "  --output PATTERN     override the output pattern (#### = frame number)\n"
             "  --out DIR            write into DIR, keeping the pattern's file name\n"
-            "  --integrator NAME    direct or reference (bdpt, hybrid: not yet)\n"
+            "  --integrator NAME    set integrator.name: direct or reference (render only)\n"
             "  --set KEY=VALUE      override any job key by its dotted path (repeatable)\n"
             "  --resume             skip frames whose files are already complete\n"
             "  --preview            also write NAME.####.png through OpenColorIO\n"
             "  --device NAME|INDEX  pick a Vulkan device (default: lavapipe)\n"
             "  --validate           enable the Khronos validation layer; any message fails\n"
-            "  --spp N              reference: samples per pixel\n"
+            "  --spp N              reference: samples per pixel (integrator.reference.spp)\n"
             "  --time-limit S       reference: stop at the pass of samples that crosses S seconds\n"
             "  --threads N          reference: worker threads (default: all cores)\n"
             "  -q, --quiet          no progress output\n"
@@ -92,6 +106,52 @@ static void usage(FILE *f, const char *command)
             "  -h, --help           show this help\n"
             "\n"
             "Exit status: 0 ok, 1 rendering failed, 2 bad usage or job, 3 no usable device.\n");
+}
+
+static int add_override(struct options *o, const char *key, const char *value, const char *origin)
+{
+    if (o->override_count == MAX_OVERRIDES) {
+        cmd_error("more than %d --set options and the options that set job keys", MAX_OVERRIDES);
+        return -1;
+    }
+    o->overrides[o->override_count++] = (struct rb_job_override){key, value, origin};
+    return 0;
+}
+
+/* --frames A-B or A: frames.start and frames.end, checked by the job's key table. A leading
+ * '-' belongs to A, so "-3" is a start of -3, which the table refuses. */
+static int sugar_frames(struct options *o, const char *arg)
+{
+    snprintf(o->frames_origin, sizeof(o->frames_origin), "--frames '%s'", arg);
+    const char *dash = arg[0] ? strchr(arg + 1, '-') : NULL;
+    size_t a = dash ? (size_t)(dash - arg) : strlen(arg);
+    const char *end = dash ? dash + 1 : arg;
+    if (!arg[0] || a >= sizeof(o->frames_start) || strlen(end) >= sizeof(o->frames_end)) {
+        cmd_error("%s: expected A-B or A (frame numbers)", o->frames_origin);
+        return -1;
+    }
+    memcpy(o->frames_start, arg, a);
+    o->frames_start[a] = '\0';
+    memcpy(o->frames_end, end, strlen(end) + 1);
+    if (!o->frames_end[0]) {
+        cmd_error("%s: expected A-B or A, and B is missing", o->frames_origin);
+        return -1;
+    }
+    return add_override(o, "frames.start", o->frames_start, o->frames_origin) ||
+           add_override(o, "frames.end", o->frames_end, o->frames_origin);
+}
+
+/* --size WxH: resolution [W, H], checked by the key table. */
+static int sugar_size(struct options *o, const char *arg)
+{
+    snprintf(o->size_origin, sizeof(o->size_origin), "--size '%s'", arg);
+    const char *x = strchr(arg, 'x');
+    if (!x || x == arg || !x[1] || strlen(arg) > 32) {
+        cmd_error("%s: expected WxH, e.g. 640x360", o->size_origin);
+        return -1;
+    }
+    snprintf(o->size_value, sizeof(o->size_value), "[%.*s, %s]", (int)(x - arg), arg, x + 1);
+    return add_override(o, "resolution", o->size_value, o->size_origin);
 }
 
 static int parse_options(int argc, char **argv, struct options *o)
@@ -133,38 +193,52 @@ static int parse_options(int argc, char **argv, struct options *o)
     int c;
     optind = 1;
     while ((c = getopt_long(argc, argv, "qvh", opts, NULL)) != -1) {
+        int bad = 0;
         switch (c) {
-        case O_FRAMES: o->frames = optarg; break;
-        case O_SIZE: o->size = optarg; break;
+        case O_FRAMES: bad = sugar_frames(o, optarg); break;
+        case O_SIZE: bad = sugar_size(o, optarg); break;
         case O_OUTPUT: o->output = optarg; break;
         case O_OUT: o->out_dir = optarg; break;
-        case O_INTEGRATOR: o->integrator = optarg; break;
+        case O_INTEGRATOR:
+            o->integrator = optarg;
+            snprintf(o->integrator_origin, sizeof(o->integrator_origin), "--integrator '%s'",
+                     optarg);
+            bad = add_override(o, "integrator.name", optarg, o->integrator_origin);
+            break;
         case O_SET: {
             char *eq = strchr(optarg, '=');
             if (!eq || eq == optarg) {
                 cmd_error("--set expects KEY=VALUE, got '%s'", optarg);
                 return -1;
             }
-            if (o->override_count == MAX_OVERRIDES) {
-                cmd_error("more than %d --set options", MAX_OVERRIDES);
-                return -1;
-            }
             *eq = '\0';
-            o->overrides[o->override_count++] = (struct rb_job_override){optarg, eq + 1};
+            bad = add_override(o, optarg, eq + 1, NULL);
             break;
         }
         case O_RESUME: o->resume = true; break;
         case O_PREVIEW: o->preview = true; break;
         case O_DEVICE: o->device = optarg; break;
         case O_VALIDATE: o->validate = true; break;
-        case O_SPP: o->spp = optarg; break;
-        case O_TIME_LIMIT: o->time_limit = optarg; break;
+        case O_SPP:
+            o->spp = optarg;
+            snprintf(o->spp_origin, sizeof(o->spp_origin), "--spp '%s'", optarg);
+            bad = add_override(o, "integrator.reference.spp", optarg, o->spp_origin);
+            break;
+        case O_TIME_LIMIT:
+            o->time_limit = optarg;
+            snprintf(o->time_limit_origin, sizeof(o->time_limit_origin), "--time-limit '%s'",
+                     optarg);
+            bad =
+                add_override(o, "integrator.reference.time_limit_s", optarg, o->time_limit_origin);
+            break;
         case O_THREADS: o->threads = optarg; break;
         case 'q': o->quiet = true; break;
         case 'v': o->verbose++; break;
         case 'h': usage(stdout, o->command); return 1;
         default: usage(stderr, o->command); return -1;
         }
+        if (bad)
+            return -1;
     }
     if (optind != argc - 1) {
         cmd_error(optind >= argc ? "%s needs a JOB" : "%s takes one JOB", o->command);
@@ -175,75 +249,30 @@ static int parse_options(int argc, char **argv, struct options *o)
     return 0;
 }
 
-/* Applies --size, --frames, --output, --out and --integrator to the parsed job. */
+/* Applies --output and --out (paths as given, relative to the working directory, not to the
+ * job file) and refuses the options that the job's integrator would ignore. */
 static int apply_cli(const struct options *o, struct rb_job *job)
 {
-    if (o->size) {
-        unsigned w, h;
-        char tail;
-        if (sscanf(o->size, "%ux%u%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 16384 ||
-            h > 16384) {
-            cmd_error("--size expects WxH with 1..16384 each, got '%s'", o->size);
-            return -1;
-        }
-        job->width_px = w;
-        job->height_px = h;
+    bool is_reference = strcmp(o->command, "reference") == 0;
+    if (is_reference && o->integrator) {
+        cmd_error("reference renders with the CPU reference; --integrator is for render");
+        return -1;
     }
-    if (o->frames) {
-        int a, b;
-        char tail;
-        int n = sscanf(o->frames, "%d-%d%c", &a, &b, &tail);
-        if (n == 1)
-            b = a;
-        if ((n != 1 && n != 2) || b < a) {
-            cmd_error("--frames expects A-B with A <= B, or A, got '%s'", o->frames);
-            return -1;
-        }
-        job->frame_start = a;
-        job->frame_end = b;
-    }
-    if (o->output) {
-        free(job->output);
-        job->output = rb_strdup(o->output);
-    }
-    if (o->out_dir) {
-        const char *slash = strrchr(job->output, '/');
-        const char *base = slash ? slash + 1 : job->output;
-        size_t n = strlen(o->out_dir) + strlen(base) + 2;
-        char *p = malloc(n);
-        if (!p)
-            return -1;
-        snprintf(p, n, "%s/%s", o->out_dir, base);
-        free(job->output);
-        job->output = p;
-    }
-    if (o->integrator) {
-        enum rb_integrator_kind k = rb_integrator_from_name(o->integrator);
-        if (k == RB_INTEGRATOR_DEFAULT) {
-            cmd_error("unknown integrator '%s' (direct, bdpt, hybrid, reference)", o->integrator);
-            return -1;
-        }
-        job->integrator.name = k;
-    }
-    if (strcmp(o->command, "reference") == 0)
+    if (is_reference)
         job->integrator.name = RB_INTEGRATOR_REFERENCE;
-    if (o->spp) {
-        unsigned n;
-        char tail;
-        if (sscanf(o->spp, "%u%c", &n, &tail) != 1 || n < 1 || n > 1048576) {
-            cmd_error("--spp expects 1..1048576, got '%s'", o->spp);
+    if (job->integrator.name != RB_INTEGRATOR_REFERENCE) {
+        const char *opt = o->spp          ? "--spp"
+                          : o->time_limit ? "--time-limit"
+                          : o->threads    ? "--threads"
+                                          : NULL;
+        if (opt) {
+            cmd_error("%s applies to the reference integrator only, and this job renders with "
+                      "'%s' (use 'raybundle reference')",
+                      opt,
+                      rb_integrator_name(job->integrator.name ? job->integrator.name
+                                                              : RB_INTEGRATOR_DIRECT));
             return -1;
         }
-        job->integrator.reference.spp = n;
-    }
-    if (o->time_limit) {
-        double s;
-        char tail;
-        if (sscanf(o->time_limit, "%lf%c", &s, &tail) != 1 || !(s >= 0.0)) {
-            cmd_error("--time-limit expects seconds >= 0, got '%s'", o->time_limit);
-            return -1;
-        }
-        job->integrator.reference.time_limit_s = s;
     }
     if (o->threads) {
         unsigned n;
@@ -253,8 +282,28 @@ static int apply_cli(const struct options *o, struct rb_job *job)
             return -1;
         }
     }
+    if (o->output) {
+        free(job->output);
+        job->output = rb_strdup(o->output);
+    }
+    if (o->out_dir && job->output) {
+        const char *slash = strrchr(job->output, '/');
+        const char *base = slash ? slash + 1 : job->output;
+        size_t n = strlen(o->out_dir) + strlen(base) + 2;
+        char *p = malloc(n);
+        if (p)
+            snprintf(p, n, "%s/%s", o->out_dir, base);
+        free(job->output);
+        job->output = p;
+    }
     if (!job->output) {
         cmd_error("out of memory");
+        return -1;
+    }
+    struct rb_err err = RB_ERR_INIT;
+    if ((o->output || o->out_dir) &&
+        rb_job_check_output(job->output, job->frame_start, job->frame_end, &err)) {
+        cmd_error("%s: %s", o->output ? "--output" : "--out", err.msg);
         return -1;
     }
     rb_job_rehash(job);
@@ -302,8 +351,9 @@ static void progress(bool tty, int done, int total, int frame, double sec_per_fr
         fprintf(stderr, "\r[%.*s%.*s] %d/%d frames  %.2f s/frame  ETA %.0f s ", fill,
                 "##############################", width - fill, "                              ",
                 done, total, sec_per_frame, eta);
+        cmd_bar_open = true;
         if (done == total)
-            fputc('\n', stderr);
+            cmd_end_bar();
     } else if (skipped) {
         fprintf(stderr, "raybundle: frame %d (%d/%d) already complete, skipped\n", frame, done,
                 total);
@@ -313,7 +363,8 @@ static void progress(bool tty, int done, int total, int frame, double sec_per_fr
 }
 
 /* Splits the packed readback into the EXR's layers and writes it with its metadata. */
-static enum rb_status write_exr(const char *path, const struct rb_job *job, const struct frame *r,
+static enum rb_status write_exr(const char *path, const struct rb_job *job,
+                                const struct rb_scene_setup *setup, const struct frame *r,
                                 float *scratch, struct rb_err *err)
 {
     size_t n = (size_t)r->width_px * r->height_px;
@@ -345,7 +396,7 @@ static enum rb_status write_exr(const char *path, const struct rb_job *job, cons
         p += n * layers[l].count;
     }
     char hash[17];
-    snprintf(hash, sizeof(hash), "%016llx", (unsigned long long)job->hash);
+    snprintf(hash, sizeof(hash), "%016llx", (unsigned long long)setup->job_hash);
     struct rb_io_attr attrs[] = {
         {.name = "raybundle:version", .type = RB_IO_ATTR_STRING, .s = RB_VERSION},
         {.name = "raybundle:integrator",
@@ -354,6 +405,9 @@ static enum rb_status write_exr(const char *path, const struct rb_job *job, cons
         {.name = "raybundle:jobHash", .type = RB_IO_ATTR_STRING, .s = hash},
         {.name = "raybundle:frame", .type = RB_IO_ATTR_INT, .i = r->frame},
         {.name = "raybundle:time", .type = RB_IO_ATTR_FLOAT, .f = (float)r->time_s},
+        {.name = "raybundle:defaultLight",
+         .type = RB_IO_ATTR_STRING,
+         .s = setup->default_light_note},
         {.name = "worldToCamera", .type = RB_IO_ATTR_M44},
         {.name = "worldToNDC", .type = RB_IO_ATTR_M44},
         {.name = "raybundle:spp", .type = RB_IO_ATTR_INT, .i = (int)r->spp},
@@ -361,8 +415,8 @@ static enum rb_status write_exr(const char *path, const struct rb_job *job, cons
     size_t attr_count = sizeof(attrs) / sizeof(attrs[0]) - (r->spp ? 0 : 1);
     /* Our matrices are column-major for column vectors, which is exactly Imath's row-major
      * layout for row vectors: the floats go over unchanged. */
-    memcpy(attrs[5].m, r->world_to_camera.m, sizeof(attrs[5].m));
-    memcpy(attrs[6].m, r->world_to_ndc.m, sizeof(attrs[6].m));
+    memcpy(attrs[6].m, r->world_to_camera.m, sizeof(attrs[6].m));
+    memcpy(attrs[7].m, r->world_to_ndc.m, sizeof(attrs[7].m));
     return rb_io_exr_write(path, r->width_px, r->height_px, out, LAYER_COUNT, attrs, attr_count,
                            err);
 }
@@ -427,6 +481,7 @@ static bool on_reference_pass(void *user, uint32_t done, uint32_t total)
         char line[80];
         snprintf(line, sizeof(line), "  %u/%u samples", done, total);
         fprintf(stderr, "\r%-66s", line); /* pad over the frame bar */
+        cmd_bar_open = true;
     }
     return !interrupted;
 }
@@ -475,8 +530,8 @@ static enum rb_status backend_render(struct backend *b, int f, struct frame *out
 /* Creates the backend the job's integrator needs; GPU errors keep their exit codes. */
 static enum rb_status backend_create(struct backend *b, const struct options *o,
                                      const struct rb_job *job, const struct rb_scene *scene,
-                                     const float *env, uint32_t env_w, uint32_t env_h,
-                                     struct rb_err *err)
+                                     const struct rb_scene_setup *setup, const float *env,
+                                     uint32_t env_w, uint32_t env_h, struct rb_err *err)
 {
     if (job->integrator.name == RB_INTEGRATOR_REFERENCE) {
         unsigned threads = 0;
@@ -491,6 +546,7 @@ static enum rb_status backend_create(struct backend *b, const struct options *o,
                                                                .env_rgba = env,
                                                                .env_width_px = env_w,
                                                                .env_height_px = env_h,
+                                                               .setup = setup,
                                                                .thread_count = threads,
                                                                .on_pass = on_reference_pass,
                                                                .user = b},
@@ -507,7 +563,8 @@ static enum rb_status backend_create(struct backend *b, const struct options *o,
                                                              .gpu = b->gpu,
                                                              .env_rgba = env,
                                                              .env_width_px = env_w,
-                                                             .env_height_px = env_h},
+                                                             .env_height_px = env_h,
+                                                             .setup = setup},
                                 &b->it, err);
 }
 
@@ -551,18 +608,76 @@ static enum rb_status load_env(const char *path, float **out, uint32_t *w, uint3
     return RB_OK;
 }
 
+/* Whether --resume may keep the frame at path: complete, with its timing sidecar, and rendered
+ * by the same job (the job hash covers the settings that change pixels, the named integrator's
+ * settings and sample count, and the contents of the scene and environment map). */
+enum resume_verdict { RENDER, KEEP, STALE };
+
+static enum resume_verdict resume_verdict(const char *path, const char *timing, const char *hash)
+{
+    if (!rb_io_image_is_complete(path) || access(timing, R_OK) != 0)
+        return RENDER;
+    char recorded[32];
+    if (!rb_io_image_attr(path, "raybundle:jobHash", recorded, sizeof(recorded)) ||
+        strcmp(recorded, hash) != 0)
+        return STALE;
+    return KEEP;
+}
+
+static uint64_t file_size(const char *path)
+{
+    struct stat sb;
+    return stat(path, &sb) == 0 ? (uint64_t)sb.st_size : 0;
+}
+
+/* After the first frame written: refuses to go on when the rest of the range, at the size that
+ * frame took, would not fit on the output's file system (with 5% to spare). */
+static enum rb_status check_space(const char *path, const char *timing, bool preview, int left,
+                                  struct rb_err *err)
+{
+    uint64_t frame = file_size(path) + file_size(timing);
+    if (preview) {
+        char png[4096];
+        if (rb_io_sidecar_path(path, ".png", png, sizeof(png), NULL) == RB_OK)
+            frame += file_size(png);
+    }
+    uint64_t need = frame * (uint64_t)left, have = rb_io_free_bytes(path);
+    if (have == UINT64_MAX || need + need / 20 <= have)
+        return RB_OK;
+    return rb_errf(err, RB_E_IO,
+                   "the %d frames left need about %.1f GB at %.0f KB a frame, and the output's "
+                   "file system has %.1f GB free",
+                   left, need / 1e9, frame / 1e3, have / 1e9);
+}
+
+/* The directory part of a pattern, for the closing line. */
+static void output_dir(const char *pattern, char *dir, size_t size)
+{
+    const char *slash = strrchr(pattern, '/');
+    if (slash)
+        snprintf(dir, size, "%.*s/", (int)(slash - pattern), pattern);
+    else
+        rb_strlcpy(dir, "./", size);
+}
+
 static int run(struct options *o, int argc, char **argv)
 {
     int rc = parse_options(argc, argv, o);
     if (rc)
         return rc > 0 ? RB_EXIT_OK : RB_EXIT_USAGE;
     rb_log_set_level(o->quiet ? RB_LOG_ERROR : (enum rb_log_level)(RB_LOG_WARN + o->verbose));
+    rb_log_set_sink(log_sink, NULL);
     if (getenv("RB_VALIDATE") && strcmp(getenv("RB_VALIDATE"), "1") == 0)
         o->validate = true;
+    /* A test hook: kill the process (SIGKILL, like a farm's scheduler) right after frame N's
+     * files are written, for deterministic resume tests. */
+    const char *abort_env = getenv("RB_TEST_ABORT_AFTER_FRAME");
+    int abort_after = abort_env && *abort_env ? atoi(abort_env) : INT32_MIN;
 
     struct rb_err err = RB_ERR_INIT;
     struct rb_job *job = NULL;
     struct rb_scene *scene = NULL;
+    struct rb_scene_setup setup;
     struct backend b = {.quiet = o->quiet};
     float *env = NULL, *scratch = NULL;
     uint32_t env_w = 0, env_h = 0;
@@ -590,8 +705,19 @@ static int run(struct options *o, int argc, char **argv)
         rc = exit_for(st, false);
         goto out;
     }
+    if ((st = rb_scene_setup_init(job, scene, env, env_w, env_h, &setup, &err))) {
+        cmd_error("%s", err.msg);
+        rc = exit_for(st, false);
+        goto out;
+    }
+    int first = job->frame_start, last = resolve_end(job, scene);
+    if ((st = rb_job_check_output(job->output, first, last, &err))) {
+        cmd_error("%s", err.msg);
+        rc = RB_EXIT_USAGE;
+        goto out;
+    }
     b.tty = !o->quiet && isatty(STDERR_FILENO);
-    if ((st = backend_create(&b, o, job, scene, env, env_w, env_h, &err))) {
+    if ((st = backend_create(&b, o, job, scene, &setup, env, env_w, env_h, &err))) {
         cmd_error("%s", err.msg);
         rc = st == RB_E_UNSUPPORTED || st == RB_E_INVALID ? RB_EXIT_USAGE : exit_for(st, true);
         goto out;
@@ -602,61 +728,108 @@ static int run(struct options *o, int argc, char **argv)
         rc = RB_EXIT_FAILED;
         goto out;
     }
+    char path[4096], timing[4096], hash[17];
+    snprintf(hash, sizeof(hash), "%016llx", (unsigned long long)setup.job_hash);
+    if ((st = rb_io_frame_path(job->output, first, path, sizeof(path), &err)) ||
+        (st = rb_io_check_writable(path, &err))) {
+        cmd_error("%s", err.msg);
+        rc = RB_EXIT_USAGE; /* a bad output location, found before any rendering */
+        goto out;
+    }
 
-    int first = job->frame_start, last = resolve_end(job, scene);
-    int total = last - first + 1, done = 0;
-    signal(SIGINT, on_sigint);
+    int total = last - first + 1, done = 0, rendered = 0, skipped = 0, stale = 0;
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
     double started = now_s();
-    int rendered = 0;
     for (int f = first; f <= last; f++) {
         if (interrupted) {
             cmd_error("interrupted: frames %d to %d were not rendered", f, last);
             rc = RB_EXIT_FAILED;
             break;
         }
-        char path[4096], timing[4096];
         if ((st = rb_io_frame_path(job->output, f, path, sizeof(path), &err)) ||
             (st = rb_io_sidecar_path(path, ".timing.json", timing, sizeof(timing), &err))) {
             cmd_error("%s", err.msg);
             rc = RB_EXIT_USAGE;
             break;
         }
-        if (o->resume && rb_io_image_is_complete(path) && access(timing, R_OK) == 0) {
-            done++;
-            if (!o->quiet)
-                progress(b.tty, done, total, f, 0.0, true);
-            continue;
-        }
         if (o->resume) {
-            unsigned stale = rb_io_remove_stale_temps(path);
-            if (stale)
-                rb_log(RB_LOG_INFO,
-                       "frame %d: removed %u temporary file(s) of an interrupted "
-                       "run",
-                       f, stale);
+            enum resume_verdict v = resume_verdict(path, timing, hash);
+            if (v == KEEP) {
+                done++;
+                skipped++;
+                if (!o->quiet)
+                    progress(b.tty, done, total, f, 0.0, true);
+                continue;
+            }
+            if (v == STALE) {
+                stale++;
+                if (!o->quiet && !b.tty)
+                    fprintf(stderr,
+                            "raybundle: frame %d was rendered by another job or setting: "
+                            "rendering it again\n",
+                            f);
+            }
+            unsigned temps = rb_io_remove_stale_temps(path);
+            if (temps)
+                rb_log(RB_LOG_INFO, "frame %d: removed %u temporary file(s) of an interrupted run",
+                       f, temps);
         }
         double t0 = now_s();
         struct frame r;
-        if ((st = backend_render(&b, f, &r, &err)) || (st = rb_io_make_parent_dirs(path, &err)) ||
-            (st = write_exr(path, job, &r, scratch, &err)) ||
+        if ((st = backend_render(&b, f, &r, &err))) {
+            cmd_error("frame %d: %s", f, err.msg);
+            rc = exit_for(st, true);
+            break;
+        }
+        if (b.ref && interrupted && r.spp < job->integrator.reference.spp) {
+            /* Stopped by the signal, not by the job's time limit: a partial frame is never
+             * written under the frame's name, so --resume renders it again. */
+            cmd_error("interrupted: frame %d stopped at %u of %u samples and was not written; "
+                      "frames %d to %d were not rendered",
+                      f, r.spp, job->integrator.reference.spp, f, last);
+            rc = RB_EXIT_FAILED;
+            break;
+        }
+        if ((st = write_exr(path, job, &setup, &r, scratch, &err)) ||
             (job->color.preview && (st = write_preview(path, job, &r, scratch, &err))) ||
             (st = write_timing(path, job, b.device, b.driver, &r, (now_s() - t0) * 1e3, &err))) {
             cmd_error("frame %d: %s", f, err.msg);
             rc = exit_for(st, true);
             break;
         }
+        if (f == abort_after)
+            kill(getpid(), SIGKILL);
         done++;
         rendered++;
         if (!o->quiet)
             progress(b.tty, done, total, f, (now_s() - started) / rendered, false);
+        if (rendered == 1 && f < last &&
+            (st = check_space(path, timing, job->color.preview, last - f, &err))) {
+            cmd_error("%s", err.msg);
+            rc = RB_EXIT_FAILED;
+            break;
+        }
     }
     signal(SIGINT, SIG_DFL);
+    signal(SIGTERM, SIG_DFL);
+    if (rc == RB_EXIT_OK) {
+        char dir[4096];
+        output_dir(job->output, dir, sizeof(dir));
+        printf("%d frame%s (%d-%d) in %s: %d rendered", total, total == 1 ? "" : "s", first, last,
+               dir, rendered);
+        if (o->resume)
+            printf(", %d kept, %d rendered again (another job)", skipped, stale);
+        printf(", %.1f s\n", now_s() - started);
+    }
 out:
+    cmd_end_bar();
     free(scratch);
     backend_destroy(&b);
     free(env);
     rb_scene_destroy(scene);
     rb_job_destroy(job);
+    rb_log_set_sink(NULL, NULL);
     return rc;
 }
 

@@ -11,6 +11,7 @@ struct rb_integrator {
     struct rb_gpu *gpu;
     const struct rb_job *job;
     const struct rb_scene *scene;
+    struct rb_scene_setup setup;
     bool has_env_map;
     uint32_t clips[MAX_CLIPS];
     struct rb_anim_selection sel;
@@ -87,11 +88,28 @@ enum rb_status rb_integrator_create(const struct rb_integrator_desc *desc,
     it->job = desc->job;
     it->scene = desc->scene;
     it->has_env_map = desc->env_rgba != NULL;
+    it->cur.setup = &it->setup;
+    it->prev.setup = &it->setup;
     uint32_t clip_count = 0;
-    enum rb_status st =
-        rb_scene_select_clips(desc->scene, desc->job, it->clips, MAX_CLIPS, &clip_count, err);
+    enum rb_status st = RB_OK;
+    if (desc->setup)
+        it->setup = *desc->setup;
+    else
+        st = rb_scene_setup_init(desc->job, desc->scene, desc->env_rgba, desc->env_width_px,
+                                 desc->env_height_px, &it->setup, err);
+    if (st == RB_OK)
+        st = rb_scene_select_clips(desc->scene, desc->job, it->clips, MAX_CLIPS, &clip_count, err);
     if (st)
         goto fail;
+    if (it->setup.punctual_count == 0 && !it->setup.has_default_light &&
+        (it->setup.has_emitters || it->setup.has_environment))
+        rb_log(RB_LOG_WARN,
+               "the direct integrator lights surfaces with punctual lights only, and this scene "
+               "is lit by %s: they show, but light nothing (bdpt or reference light with them)",
+               it->setup.has_emitters && it->setup.has_environment
+                   ? "emissive surfaces and the environment"
+               : it->setup.has_emitters ? "emissive surfaces"
+                                        : "the environment");
     it->sel = (struct rb_anim_selection){
         .clips = it->clips,
         .clip_count = clip_count,

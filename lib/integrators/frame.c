@@ -482,10 +482,10 @@ enum rb_status rb_moment_evaluate(const struct rb_job *job, const struct rb_scen
                                   struct rb_moment *m, struct rb_err *err)
 {
     rb_scene_evaluate(scene, sel, time_s, m->pose);
-    enum rb_status st = rb_camera_evaluate(job, scene, m->pose, time_s, &m->camera, err);
+    enum rb_status st = rb_camera_evaluate(job, scene, m->setup, m->pose, time_s, &m->camera, err);
     if (st)
         return st;
-    uint32_t total = rb_scene_world_lights(job, scene, m->pose, m->lights, RB_MAX_LIGHTS);
+    uint32_t total = rb_scene_world_lights(job, scene, m->setup, m->pose, m->lights, RB_MAX_LIGHTS);
     if (total > RB_MAX_LIGHTS)
         return rb_errf(err, RB_E_UNSUPPORTED, "%u lights; at most %d are supported", total,
                        RB_MAX_LIGHTS);
@@ -537,11 +537,12 @@ struct rb_mat4 rb_frame_projection(const struct rb_frame *frame, const struct rb
 }
 
 /* Shadow-map views: six 90-degree faces for a point light, the cone for a spot, a box around
- * the scene for a directional light. */
+ * the scene for a directional light. The box and the depth ranges come from the job's bounds
+ * (every pose of the animation), so they do not change from frame to frame. */
 static uint32_t write_shadow_views(const struct rb_world_light *l, const struct rb_moment *m,
                                    uint32_t size, struct rb_gpu_shadow_view *out)
 {
-    struct rb_vec3 lo = m->pose->bounds_min, hi = m->pose->bounds_max;
+    struct rb_vec3 lo = m->setup->bounds_min, hi = m->setup->bounds_max;
     struct rb_vec3 center = rb_v3_scale(rb_v3_add(lo, hi), 0.5f);
     float radius = 0.5f * rb_v3_length(rb_v3_sub(hi, lo));
     if (!(radius > 0.0f))

@@ -18,6 +18,7 @@ struct rb_integrator_desc {
     struct rb_gpu *gpu;           /* borrowed */
     const float *env_rgba;        /* equirectangular RGBA, or NULL for the job's uniform color */
     uint32_t env_width_px, env_height_px;
+    const struct rb_scene_setup *setup; /* borrowed, or NULL: the integrator decides its own */
 };
 
 struct rb_pass_timing {

@@ -7,6 +7,7 @@
 
 /* Everything the CPU knows about one time: the pose, the camera, the lights. */
 struct rb_moment {
+    const struct rb_scene_setup *setup; /* the job's, borrowed from the integrator */
     struct rb_scene_pose *pose;
     struct rb_camera camera;
     struct rb_world_light lights[RB_MAX_LIGHTS];

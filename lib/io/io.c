@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 /* The last place to look for data: the default prefix's. The binary looks beside itself first
@@ -135,6 +136,44 @@ enum rb_status rb_io_make_parent_dirs(const char *path, struct rb_err *err)
 out:
     free(dir);
     return st;
+}
+
+/* The directory part of path into dir ("." when it has none). */
+static void dirname_of(const char *path, char *dir, size_t size)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        rb_strlcpy(dir, ".", size);
+    else if (slash == path)
+        rb_strlcpy(dir, "/", size);
+    else
+        snprintf(dir, size, "%.*s", (int)(slash - path), path);
+}
+
+enum rb_status rb_io_check_writable(const char *path, struct rb_err *err)
+{
+    enum rb_status st = rb_io_make_parent_dirs(path, err);
+    if (st)
+        return st;
+    char dir[PATH_MAX], probe[PATH_MAX + 64];
+    dirname_of(path, dir, sizeof(dir));
+    snprintf(probe, sizeof(probe), "%s/.raybundle-probe.tmp.%ld", dir, (long)getpid());
+    int fd = open(probe, O_WRONLY | O_CREAT | O_EXCL, 0644);
+    if (fd < 0)
+        return rb_errf(err, RB_E_IO, "cannot write to directory '%s': %s", dir, strerror(errno));
+    close(fd);
+    unlink(probe);
+    return RB_OK;
+}
+
+uint64_t rb_io_free_bytes(const char *path)
+{
+    char dir[PATH_MAX];
+    dirname_of(path, dir, sizeof(dir));
+    struct statvfs vfs;
+    if (statvfs(dir, &vfs) != 0)
+        return UINT64_MAX;
+    return (uint64_t)vfs.f_bavail * vfs.f_frsize;
 }
 
 unsigned rb_io_remove_stale_temps(const char *path)

@@ -20,6 +20,15 @@ enum rb_status rb_io_sidecar_path(const char *exr_path, const char *suffix, char
 /* Creates every missing directory leading to path's file (like mkdir -p of its dirname). */
 enum rb_status rb_io_make_parent_dirs(const char *path, struct rb_err *err);
 
+/* Creates the directories leading to path's file and checks that a file can be created there
+ * (a probe, removed at once), so a run fails before rendering rather than at its first write.
+ * RB_E_IO names the directory and the cause. */
+enum rb_status rb_io_check_writable(const char *path, struct rb_err *err);
+
+/* Bytes free to an unprivileged writer on the file system of path's directory; UINT64_MAX when
+ * it cannot be told. */
+uint64_t rb_io_free_bytes(const char *path);
+
 /* Writes data to path + ".tmp.<pid>", fsyncs, and renames it over path. */
 enum rb_status rb_io_write_atomic(const char *path, const void *data, size_t size,
                                   struct rb_err *err);

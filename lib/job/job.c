@@ -65,6 +65,7 @@ static const char *const integrator_names[] = {NULL, "direct", "bdpt", "hybrid",
 static const char *const interp_names[] = {NULL, "linear", "catmull-rom"};
 static const char *const path_names[] = {NULL, "full", "direct", "bdpt"};
 static const char *const light_names[] = {NULL, "point", "spot", "directional"};
+static const char *const default_light_names[] = {NULL, "auto", "on", "off"};
 
 #define COUNT(a) (sizeof(a) / sizeof((a)[0]))
 #define JOB(f) offsetof(struct rb_job, f)
@@ -157,6 +158,10 @@ static const struct key keys[] = {
       "spot light: angle from the axis where the light ends"),
     K("scene_lights", KT_BOOL, JOB(use_scene_lights), NOLO, NOHI, "true", 0,
       "use the scene's KHR_lights_punctual lights"),
+    K("default_light", KT_ENUM, JOB(default_light), NOLO, NOHI, "auto", 0,
+      "add a point light: auto when the frame would be unlit (no punctual light, no emissive "
+      "surface, a black environment), on always, off never",
+      ENUM(default_light_names)),
     K("environment.map", KT_PATH, JOB(environment.map), NOLO, NOHI, NULL, KF_MUST_EXIST,
       "equirectangular EXR or HDR image of the distant environment"),
     K("environment.color", KT_VEC3, JOB(environment.color), 0, NOHI, "[0, 0, 0]", 0,
@@ -211,6 +216,7 @@ struct ctx {
     const char *text;     /* the document's text, for reader errors that carry an offset */
     yaml_document_t *doc; /* the document being walked */
     size_t set_index;     /* 1-based override index; 0 while walking the file */
+    const char *origin;   /* the override's origin (messages name it, not --set:N), or NULL */
     size_t col_offset;    /* columns before an override's value: strlen("key=") */
     unsigned seq;
     struct mark root;             /* the file's top-level mapping */
@@ -220,6 +226,8 @@ struct ctx {
 
 static struct mark mark_at(struct ctx *c, yaml_mark_t m)
 {
+    if (c->set_index && c->origin)
+        return (struct mark){c->origin, 0, 0, ++c->seq};
     if (c->set_index)
         return (struct mark){"--set", c->set_index, c->col_offset + m.column + 1, ++c->seq};
     return (struct mark){c->name, m.line + 1, m.column + 1, ++c->seq};
@@ -236,6 +244,8 @@ static enum rb_status fail(struct ctx *c, const struct mark *m, enum rb_status c
     va_start(ap, fmt);
     vsnprintf(msg, sizeof(msg), fmt, ap);
     va_end(ap);
+    if (m && m->src && m->line == 0) /* a command-line option, no position inside it */
+        return rb_errf(c->err, code, "%s: %s", m->src, msg);
     if (m && m->src)
         return rb_errf(c->err, code, "%s:%zu:%zu: %s", m->src, m->line, m->col, msg);
     return rb_errf(c->err, code, "%s: %s", c->name, msg);
@@ -885,12 +895,14 @@ static enum rb_status apply_override(struct ctx *c, size_t index, const struct r
     enum rb_status st = RB_OK;
 
     c->set_index = index;
+    c->origin = o->origin;
     c->col_offset = 0;
     /* Walk the dotted key one component at a time, so an error points at the bad one. */
     for (size_t pos = 0;;) {
         size_t len = strcspn(key + pos, ".");
         char name[64];
-        struct mark at = {"--set", index, pos + 1, ++c->seq};
+        struct mark at = o->origin ? (struct mark){o->origin, 0, 0, ++c->seq}
+                                   : (struct mark){"--set", index, pos + 1, ++c->seq};
         if (!len || len >= sizeof(name))
             return fail(c, &at, RB_E_PARSE, "bad key '%s'", key);
         memcpy(name, key + pos, len);
@@ -931,7 +943,7 @@ static enum rb_status apply_override(struct ctx *c, size_t index, const struct r
         c->doc = &doc;
         yaml_node_t *root = yaml_document_get_root_node(&doc);
         if (!root) {
-            struct mark at = {"--set", index, c->col_offset + 1, ++c->seq};
+            struct mark at = mark_at(c, (yaml_mark_t){0});
             st = fail(c, &at, RB_E_PARSE, "'%s' has no value", path);
         } else {
             st = walk_at(c, path, path, root, c->job, c->marks);
@@ -941,11 +953,34 @@ static enum rb_status apply_override(struct ctx *c, size_t index, const struct r
     if (has_doc)
         yaml_document_delete(&doc);
     c->set_index = 0;
+    c->origin = NULL;
     c->col_offset = 0;
     return st;
 }
 
 /* ---- validation ---------------------------------------------------------------------------- */
+
+enum rb_status rb_job_check_output(const char *pattern, int frame_start, int frame_end,
+                                   struct rb_err *err)
+{
+    const char *slash = strrchr(pattern, '/');
+    const char *base = slash ? slash + 1 : pattern;
+    size_t n = strlen(base);
+    if (n < 5 || strcasecmp(base + n - 4, ".exr") != 0)
+        return rb_errf(err, RB_E_INVALID,
+                       "output '%s' must name an .exr file (sidecars and previews go beside it)",
+                       pattern);
+    if (!strchr(base, '#') && frame_end != frame_start) {
+        char end[32] = "the end of the animation";
+        if (frame_end >= 0)
+            snprintf(end, sizeof(end), "%d", frame_end);
+        return rb_errf(err, RB_E_INVALID,
+                       "output '%s' has no '#' for the frame number, and frames %d to %s are "
+                       "more than one",
+                       pattern, frame_start, end);
+    }
+    return RB_OK;
+}
 
 static size_t key_index(const char *path)
 {
@@ -1016,6 +1051,9 @@ static enum rb_status validate(struct ctx *c)
         return fail(c, mark_of(m, "frames.end", "frames.start", &c->root), RB_E_INVALID,
                     "'frames.end' (%d) must be -1 or >= 'frames.start' (%d)", job->frame_end,
                     job->frame_start);
+    struct rb_err why = RB_ERR_INIT;
+    if (rb_job_check_output(job->output, job->frame_start, job->frame_end, &why))
+        return fail(c, mark_of(m, "output", NULL, &c->root), RB_E_INVALID, "%s", why.msg);
     if (job->camera.node && job->camera.key_count)
         return fail(c, later_mark(m, "camera.node", "camera.keys"), RB_E_INVALID,
                     "'camera.node' and 'camera.keys' are mutually exclusive");
@@ -1135,6 +1173,8 @@ void rb_job_rehash(struct rb_job *job)
         h = h_f32(h, l->outer_cone_deg);
     }
     h = h_u32(h, job->use_scene_lights);
+    h = h_u32(h, job->default_light == RB_DEFAULT_LIGHT_DEFAULT ? RB_DEFAULT_LIGHT_AUTO
+                                                                : job->default_light);
 
     h = h_str(h, job->environment.map);
     h = h_vec3(h, job->environment.color);
@@ -1144,13 +1184,18 @@ void rb_job_rehash(struct rb_job *job)
     enum rb_integrator_kind kind =
         job->integrator.name ? job->integrator.name : RB_INTEGRATOR_DIRECT;
     h = h_u32(h, (uint32_t)kind);
-    h = h_u32(h, job->integrator.direct.shadow_size_px);
-    h = h_f32(h, job->integrator.direct.shadow_bias);
-    h = h_f32(h, job->integrator.direct.pcf_radius_px);
-    h = h_u32(h, job->integrator.reference.spp);
-    h = h_u32(h, job->integrator.reference.max_bounces);
-    h = h_u32(h, job->integrator.reference.rr_depth);
-    h = h_u32(h, (uint32_t)job->integrator.reference.paths);
+    /* Only the named integrator's settings: a frame does not depend on another's. */
+    if (kind == RB_INTEGRATOR_REFERENCE) {
+        h = h_u32(h, job->integrator.reference.spp);
+        h = h_u32(h, job->integrator.reference.max_bounces);
+        h = h_u32(h, job->integrator.reference.rr_depth);
+        h = h_u32(h, (uint32_t)job->integrator.reference.paths);
+        h = h_f64(h, job->integrator.reference.time_limit_s);
+    } else {
+        h = h_u32(h, job->integrator.direct.shadow_size_px);
+        h = h_f32(h, job->integrator.direct.shadow_bias);
+        h = h_f32(h, job->integrator.direct.pcf_radius_px);
+    }
     job->hash = h;
 }
 
@@ -1159,8 +1204,11 @@ void rb_job_rehash(struct rb_job *job)
 static enum rb_status apply_overrides(struct ctx *c, const struct rb_job_override *overrides,
                                       size_t override_count)
 {
+    /* "--set:N" counts the --set options alone; options that are sugar for one name themselves. */
+    size_t sets = 0;
     for (size_t i = 0; i < override_count; i++) {
-        enum rb_status st = apply_override(c, i + 1, &overrides[i]);
+        size_t index = overrides[i].origin ? i + 1 : ++sets;
+        enum rb_status st = apply_override(c, index, &overrides[i]);
         if (st)
             return st;
     }

@@ -39,6 +39,14 @@ enum rb_light_type {
     RB_LIGHT_DIRECTIONAL,
 };
 
+/* When a default point light is added (lib/scene/setup.c). */
+enum rb_default_light {
+    RB_DEFAULT_LIGHT_DEFAULT = 0, /* resolves to AUTO */
+    RB_DEFAULT_LIGHT_AUTO,        /* only when the frame would otherwise be unlit */
+    RB_DEFAULT_LIGHT_ON,          /* always, beside the other lights */
+    RB_DEFAULT_LIGHT_OFF,         /* never */
+};
+
 struct rb_job_camera_key {
     double t_s;
     float position[3];
@@ -83,6 +91,7 @@ struct rb_job {
     struct rb_job_light *lights; /* added to the scene's own lights */
     size_t light_count;
     bool use_scene_lights; /* default true */
+    enum rb_default_light default_light;
 
     struct {
         char *map;          /* equirectangular EXR/HDR, resolved; NULL: uniform color */
@@ -114,13 +123,17 @@ struct rb_job {
         bool preview;  /* write NAME.####.png beside each EXR */
     } color;
 
-    uint64_t hash; /* of every setting that changes pixels (not the frame range or output) */
+    uint64_t hash; /* of every setting that changes pixels: the scene's path, not its contents
+                    * (struct rb_scene_setup's job_hash adds those); the named integrator's
+                    * settings only; not the frame range or output */
 };
 
 /* One `--set key.path=value` override, applied after the file is parsed. */
 struct rb_job_override {
-    const char *key;   /* dotted path, e.g. "integrator.direct.shadow_size" */
-    const char *value; /* YAML flow text, e.g. "512" or "[640, 360]" */
+    const char *key;    /* dotted path, e.g. "integrator.direct.shadow_size" */
+    const char *value;  /* YAML flow text, e.g. "512" or "[640, 360]" */
+    const char *origin; /* what the user wrote, for messages ("--frames '2-1'"); NULL: --set,
+                         * and messages name "--set:N:col" */
 };
 
 /* Parses a job file, applies overrides in order, validates, resolves defaults and relative paths
@@ -135,6 +148,13 @@ enum rb_status rb_job_load(const char *path, const struct rb_job_override *overr
 enum rb_status rb_job_parse(const char *name, const char *text, size_t size, const char *base_dir,
                             const struct rb_job_override *overrides, size_t override_count,
                             struct rb_job **out, struct rb_err *err);
+
+/* Checks an output pattern for frames frame_start..frame_end (-1: to the end of the animation):
+ * its file name ends in .exr, and has a run of '#' unless the range is one frame. Returns
+ * RB_E_INVALID with a message naming the pattern. The job parser applies it to the output key;
+ * callers that change job->output afterwards call it again. */
+enum rb_status rb_job_check_output(const char *pattern, int frame_start, int frame_end,
+                                   struct rb_err *err);
 
 /* Recomputes job->hash after a caller changed fields (the CLI's --size and such). */
 void rb_job_rehash(struct rb_job *job);

@@ -51,6 +51,7 @@
 struct rb_reference {
     const struct rb_job *job;
     const struct rb_scene *scene;
+    struct rb_scene_setup setup; /* decided once for the job: bounds, default light */
     uint32_t thread_count;
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
     void *user;
@@ -271,6 +272,11 @@ enum rb_status rb_reference_create(const struct rb_reference_desc *desc, struct 
         ref->srgb_lut[i] = srgb_to_linear((float)i / 255.0f);
 
     uint32_t clip_count = 0;
+    if (desc->setup)
+        ref->setup = *desc->setup;
+    else if ((st = rb_scene_setup_init(job, desc->scene, desc->env_rgba, desc->env_width_px,
+                                       desc->env_height_px, &ref->setup, err)))
+        goto fail;
     if ((st = rb_scene_select_clips(desc->scene, job, ref->clips, MAX_CLIPS, &clip_count, err)))
         goto fail;
     ref->sel = (struct rb_anim_selection){
@@ -359,7 +365,7 @@ void rb_reference_destroy(struct rb_reference *ref)
 
 static enum rb_status update_lights(struct rb_reference *ref, struct rb_err *err)
 {
-    uint32_t n = rb_scene_world_lights(ref->job, ref->scene, ref->pose, NULL, 0);
+    uint32_t n = rb_scene_world_lights(ref->job, ref->scene, &ref->setup, ref->pose, NULL, 0);
     if (n > ref->light_cap) {
         struct rb_world_light *wl = realloc(ref->world_lights, n * sizeof(*wl));
         if (wl)
@@ -371,7 +377,7 @@ static enum rb_status update_lights(struct rb_reference *ref, struct rb_err *err
             return rb_errf(err, RB_E_NOMEM, "out of memory for %u lights", n);
         ref->light_cap = n;
     }
-    n = rb_scene_world_lights(ref->job, ref->scene, ref->pose, ref->world_lights, n);
+    n = rb_scene_world_lights(ref->job, ref->scene, &ref->setup, ref->pose, ref->world_lights, n);
     for (uint32_t i = 0; i < n; i++) {
         const struct rb_world_light *w = &ref->world_lights[i];
         ref->lights[i] = (struct rb_ref_light){
@@ -430,13 +436,13 @@ static enum rb_status prepare_frame(struct rb_reference *ref, int frame, double 
 {
     const struct rb_job *job = ref->job;
     rb_scene_evaluate(ref->scene, &ref->sel, t_prev, ref->prev_pose);
-    enum rb_status st =
-        rb_camera_evaluate(job, ref->scene, ref->prev_pose, t_prev, &ref->prev_cam, err);
+    enum rb_status st = rb_camera_evaluate(job, ref->scene, &ref->setup, ref->prev_pose, t_prev,
+                                           &ref->prev_cam, err);
     if (st)
         return st;
     rb_ref_deform(ref->scene, ref->prev_pose, ref->prev_pos, 3, NULL, NULL, NULL);
     rb_scene_evaluate(ref->scene, &ref->sel, t, ref->pose);
-    if ((st = rb_camera_evaluate(job, ref->scene, ref->pose, t, &ref->cam, err)))
+    if ((st = rb_camera_evaluate(job, ref->scene, &ref->setup, ref->pose, t, &ref->cam, err)))
         return st;
     rb_ref_deform(ref->scene, ref->pose, ref->pos, 4, ref->nrm, ref->tan, ref->uv);
     if ((st = update_lights(ref, err)))

@@ -17,7 +17,8 @@ struct rb_reference_desc {
     const struct rb_scene *scene; /* borrowed */
     const float *env_rgba;        /* equirectangular RGBA, or NULL: job->environment.color */
     uint32_t env_width_px, env_height_px;
-    uint32_t thread_count; /* 0: all cores */
+    const struct rb_scene_setup *setup; /* borrowed, or NULL: the reference decides its own */
+    uint32_t thread_count;              /* 0: all cores */
     /* Called after each whole pass of samples with the samples done so far (for progress);
      * may be NULL. Returning false stops after that pass (as a time limit does). */
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);

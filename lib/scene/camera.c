@@ -1,5 +1,7 @@
 /* The camera at a time: a glTF camera node, the job's keyframe track, or a view fitted to the
- * posed scene bounds. Clip planes not given by the job or the file come from the bounds. */
+ * job's bounds (struct rb_scene_setup: every pose of the animation, so neither the fitted view
+ * nor the clip planes move with the animated bounds). Clip planes not given by the job or the
+ * file come from those bounds. */
 #include "scene/scene_int.h"
 
 #include <math.h>
@@ -16,10 +18,10 @@ static float job_fov_rad(const struct rb_job *job)
 /* Clip planes from the bounds as seen from eye: near halfway to the bounding sphere (at least
  * 1e-4 of the diagonal and 1e-3 of the distance to the center), far 1.5 times the distance to
  * the farthest box corner. The job's near_m/far_m, when non-zero, win. */
-static void clip_planes(const struct rb_job *job, const struct rb_scene_pose *pose,
+static void clip_planes(const struct rb_job *job, const struct rb_scene_setup *setup,
                         struct rb_vec3 eye, float file_near, float file_far, struct rb_camera *out)
 {
-    struct rb_vec3 lo = pose->bounds_min, hi = pose->bounds_max;
+    struct rb_vec3 lo = setup->bounds_min, hi = setup->bounds_max;
     struct rb_vec3 c = rb_v3_scale(rb_v3_add(lo, hi), 0.5f);
     float diag = rb_v3_length(rb_v3_sub(hi, lo)), r = 0.5f * diag;
     float dc = rb_v3_length(rb_v3_sub(eye, c)), dfar = 0.0f;
@@ -49,7 +51,8 @@ static void clip_planes(const struct rb_job *job, const struct rb_scene_pose *po
 
 /* A glTF camera node: its world matrix without scale, inverted. The camera looks down -Z. */
 static void node_camera(const struct rb_job *job, const struct rb_scene *scene,
-                        const struct rb_scene_pose *pose, uint32_t index, struct rb_camera *out)
+                        const struct rb_scene_setup *setup, const struct rb_scene_pose *pose,
+                        uint32_t index, struct rb_camera *out)
 {
     const struct rb_mat4 *w = &pose->node_world[index];
     const struct rb_scene_camera *cam = &scene->cameras[scene->nodes[index].camera];
@@ -80,7 +83,7 @@ static void node_camera(const struct rb_job *job, const struct rb_scene *scene,
                rb_scene_label(what, sizeof(what), "camera", cam->name, scene->nodes[index].camera));
         out->fov_y_rad = job_fov_rad(job);
     }
-    clip_planes(job, pose, p, cam->is_perspective ? cam->znear : 0.0f,
+    clip_planes(job, setup, p, cam->is_perspective ? cam->znear : 0.0f,
                 cam->is_perspective ? cam->zfar : 0.0f, out);
 }
 
@@ -111,7 +114,7 @@ static struct rb_vec3 catmull_rom(struct rb_vec3 p0, double t0, struct rb_vec3 p
 
 /* The job's keyframe track, clamped at both ends; the end keys act as their own phantom
  * neighbours (one key interval beyond the end). */
-static void key_camera(const struct rb_job *job, const struct rb_scene_pose *pose, double time_s,
+static void key_camera(const struct rb_job *job, const struct rb_scene_setup *setup, double time_s,
                        struct rb_camera *out)
 {
     const struct rb_job_camera_key *k = job->camera.keys;
@@ -153,31 +156,51 @@ static void key_camera(const struct rb_job *job, const struct rb_scene_pose *pos
     out->world_to_camera = rb_mat4_look_at(eye, at, rb_v3(0, 1, 0));
     out->position = eye;
     out->fov_y_rad = fov;
-    clip_planes(job, pose, eye, 0.0f, 0.0f, out);
+    clip_planes(job, setup, eye, 0.0f, 0.0f, out);
 }
 
-/* Looks at the bounds' center from above and in front (direction (0, 0.35, 1)), far enough
- * that the bounding sphere fits the narrower of the vertical and horizontal fov, plus 10%. */
-static void fit_camera(const struct rb_job *job, const struct rb_scene_pose *pose,
+/* Looks at the bounds' centre from setup->fit_direction. Into a room open on one side, the eye
+ * sits level with the centre, out in front of the opening, far enough that the opening fills
+ * the view (the back wall in the middle); otherwise (direction (0, 0.35, 1)) far enough that
+ * the bounding sphere fits the narrower of the vertical and horizontal fov, plus 10%. */
+static void fit_camera(const struct rb_job *job, const struct rb_scene_setup *setup,
                        struct rb_camera *out)
 {
-    struct rb_vec3 lo = pose->bounds_min, hi = pose->bounds_max;
+    struct rb_vec3 lo = setup->bounds_min, hi = setup->bounds_max;
     struct rb_vec3 c = rb_v3_scale(rb_v3_add(lo, hi), 0.5f);
     float r = 0.5f * rb_v3_length(rb_v3_sub(hi, lo));
     if (!(r > 0.0f) || !isfinite(r))
         r = 1.0f;
-    float fov = job_fov_rad(job), fit = fov;
-    if (job->width_px && job->height_px && job->width_px < job->height_px)
-        fit = 2.0f * atanf(tanf(0.5f * fov) * (float)job->width_px / (float)job->height_px);
-    float d = r / sinf(0.5f * fit) * 1.1f;
-    struct rb_vec3 eye = rb_v3_add(c, rb_v3_scale(rb_v3_normalize(rb_v3(0, 0.35f, 1)), d));
-    out->world_to_camera = rb_mat4_look_at(eye, c, rb_v3(0, 1, 0));
+    float fov = job_fov_rad(job);
+    float aspect = job->width_px && job->height_px ? (float)job->width_px / job->height_px : 1.0f;
+    float tan_y = tanf(0.5f * fov), tan_x = tan_y * aspect;
+    struct rb_vec3 dir = setup->fit_direction;
+    if (!(rb_v3_length(dir) > 0.5f))
+        dir = rb_v3_normalize(rb_v3(0, 0.35f, 1));
+    float d;
+    struct rb_vec3 up = rb_v3(0, 1, 0);
+    if (setup->room_open_side != RB_SIDE_NONE) {
+        /* The opening's half extents across the view (up is +Y unless looking along Y). */
+        int a = (int)(setup->room_open_side - RB_SIDE_NEG_X) / 2;
+        float ext[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+        if (a == 1)
+            up = rb_v3(0, 0, -1);
+        int vert = a == 1 ? 2 : 1, horiz = a == 0 ? 2 : 0;
+        float half_depth = 0.5f * ext[a];
+        d = half_depth + fmaxf(0.5f * ext[vert] / tan_y, 0.5f * ext[horiz] / tan_x) * 1.05f;
+    } else {
+        float fit = aspect < 1.0f ? 2.0f * atanf(tan_x) : fov;
+        d = r / sinf(0.5f * fit) * 1.1f;
+    }
+    struct rb_vec3 eye = rb_v3_add(c, rb_v3_scale(dir, d));
+    out->world_to_camera = rb_mat4_look_at(eye, c, up);
     out->position = eye;
     out->fov_y_rad = fov;
-    clip_planes(job, pose, eye, 0.0f, 0.0f, out);
+    clip_planes(job, setup, eye, 0.0f, 0.0f, out);
 }
 
 enum rb_status rb_camera_evaluate(const struct rb_job *job, const struct rb_scene *scene,
+                                  const struct rb_scene_setup *setup,
                                   const struct rb_scene_pose *pose, double time_s,
                                   struct rb_camera *out, struct rb_err *err)
 {
@@ -187,18 +210,18 @@ enum rb_status rb_camera_evaluate(const struct rb_job *job, const struct rb_scen
             return rb_errf(err, RB_E_INVALID, "camera node '%s' not found", job->camera.node);
         if (scene->nodes[i].camera == NONE || scene->nodes[i].camera >= scene->camera_count)
             return rb_errf(err, RB_E_INVALID, "node '%s' has no camera", job->camera.node);
-        node_camera(job, scene, pose, i, out);
+        node_camera(job, scene, setup, pose, i, out);
         return RB_OK;
     }
     if (job->camera.key_count && job->camera.keys) {
-        key_camera(job, pose, time_s, out);
+        key_camera(job, setup, time_s, out);
         return RB_OK;
     }
     for (uint32_t i = 0; i < scene->node_count; i++)
         if (scene->nodes[i].in_scene && scene->nodes[i].camera < scene->camera_count) {
-            node_camera(job, scene, pose, i, out);
+            node_camera(job, scene, setup, pose, i, out);
             return RB_OK;
         }
-    fit_camera(job, pose, out);
+    fit_camera(job, setup, out);
     return RB_OK;
 }

@@ -1,5 +1,5 @@
 /* Lights in world space (the scene's KHR_lights_punctual lights through their nodes, then the
- * job's, else one default light) and the job's animation clip names resolved to indices. */
+ * job's, then the setup's default light) and the job's animation clip names resolved to indices. */
 #include "scene/scene_int.h"
 
 #include <math.h>
@@ -17,8 +17,8 @@ static void put(struct rb_world_light *out, uint32_t cap, uint32_t *n,
 }
 
 uint32_t rb_scene_world_lights(const struct rb_job *job, const struct rb_scene *scene,
-                               const struct rb_scene_pose *pose, struct rb_world_light *out,
-                               uint32_t cap)
+                               const struct rb_scene_setup *setup, const struct rb_scene_pose *pose,
+                               struct rb_world_light *out, uint32_t cap)
 {
     uint32_t n = 0;
     if (job->use_scene_lights) {
@@ -63,30 +63,8 @@ uint32_t rb_scene_world_lights(const struct rb_job *job, const struct rb_scene *
             l.inner_cone_rad = l.outer_cone_rad;
         put(out, cap, &n, &l);
     }
-    if (n == 0) {
-        /* A key light above, right of and in front of the bounds (the side a fitted camera looks
-         * from, +Z), two bounding radii from the center, with an intensity that gives an
-         * irradiance of about 1 at the center. */
-        struct rb_vec3 lo = pose->bounds_min, hi = pose->bounds_max;
-        struct rb_vec3 c = rb_v3_scale(rb_v3_add(lo, hi), 0.5f);
-        float radius = 0.5f * rb_v3_length(rb_v3_sub(hi, lo));
-        if (!(radius > 0.0f))
-            radius = 1.0f;
-        struct rb_vec3 p =
-            rb_v3_add(c, rb_v3_scale(rb_v3_normalize(rb_v3(0.5f, 1.0f, 0.8f)), 2.0f * radius));
-        float d = rb_v3_length(rb_v3_sub(p, c)), i = d * d;
-        struct rb_world_light l = {
-            .type = RB_LIGHT_POINT,
-            .position = p,
-            .direction = rb_v3(0, -1, 0),
-            .color = {i, i, i},
-        };
-        rb_log(RB_LOG_INFO,
-               "no lights in the scene or the job: a default point light at "
-               "(%g, %g, %g), intensity %g",
-               p.x, p.y, p.z, i);
-        put(out, cap, &n, &l);
-    }
+    if (setup->has_default_light)
+        put(out, cap, &n, &setup->default_light);
     return n;
 }
 

@@ -1528,6 +1528,34 @@ static void log_warnings(const char *path, const char *text)
     }
 }
 
+/* The file's bytes (the JSON or the whole .glb), then each buffer and each decoded image, each
+ * length-prefixed: external .bin and texture files count through what was read from them. */
+static enum rb_status content_hash(const char *path, const struct rb_gltf_doc *doc, uint64_t *out,
+                                   struct rb_err *err)
+{
+    char *bytes = NULL;
+    size_t size = 0;
+    enum rb_status st = rb_read_file(path, &bytes, &size, err);
+    if (st)
+        return st;
+    uint64_t h = rb_hash_bulk(bytes, size, RB_HASH_SEED);
+    free(bytes);
+    for (size_t i = 0; i < doc->buffer_count; i++) {
+        uint64_t n = doc->buffers[i].size;
+        h = rb_hash_bulk(&n, sizeof(n), h);
+        h = rb_hash_bulk(doc->buffers[i].data, doc->buffers[i].size, h);
+    }
+    for (size_t i = 0; i < doc->image_count; i++) {
+        const struct rb_gltf_image *im = &doc->images[i];
+        uint64_t n = im->pixels ? im->size : UINT64_MAX;
+        h = rb_hash_bulk(&n, sizeof(n), h);
+        if (im->pixels)
+            h = rb_hash_bulk(im->pixels, im->size, h);
+    }
+    *out = h;
+    return RB_OK;
+}
+
 enum rb_status rb_scene_load(const char *path, struct rb_scene **out, struct rb_err *err)
 {
     struct rb_gltf_doc *doc = NULL;
@@ -1547,7 +1575,7 @@ enum rb_status rb_scene_load(const char *path, struct rb_scene **out, struct rb_
     if ((st = check_extensions(&c)) || (st = convert_textures(&c)) ||
         (st = convert_materials(&c)) || (st = convert_meshes(&c)) || (st = convert_nodes(&c)) ||
         (st = mark_in_scene(&c)) || (st = convert_skins(&c)) || (st = convert_cameras_lights(&c)) ||
-        (st = convert_animations(&c)))
+        (st = convert_animations(&c)) || (st = content_hash(path, doc, &c.s->content_hash, err)))
         goto out;
     /* The growth slack can be half the arrays: give it back (a failed shrink keeps them). */
     shrink((void **)&c.s->vertices, c.s->vertex_count, sizeof(struct rb_scene_vertex));

@@ -134,6 +134,8 @@ struct rb_scene_animation {
 
 struct rb_scene {
     char *path;
+    uint64_t content_hash; /* of the file's bytes, every buffer and every decoded image: changes
+                            * whenever anything the file refers to does (rb_hash_bulk) */
     struct rb_scene_vertex *vertices;
     uint32_t vertex_count;
     uint32_t *indices;
@@ -229,13 +231,6 @@ struct rb_camera {
     float z_near, z_far;
 };
 
-/* Evaluates the job's camera: a glTF camera node (from pose), keyframes (linear or Catmull-Rom,
- * clamped at the ends), or, with neither, a view fitted to the pose bounds. Fails only for a
- * camera node name that does not exist or has no camera (RB_E_INVALID). */
-enum rb_status rb_camera_evaluate(const struct rb_job *job, const struct rb_scene *scene,
-                                  const struct rb_scene_pose *pose, double time_s,
-                                  struct rb_camera *out, struct rb_err *err);
-
 /* A light in world space, from the scene (with its node's transform) or from the job. */
 struct rb_world_light {
     enum rb_light_type type;
@@ -246,12 +241,63 @@ struct rb_world_light {
     float inner_cone_rad, outer_cone_rad;
 };
 
-/* Writes up to cap lights (scene lights when job->use_scene_lights, then job lights; when that
- * gives none, one default point light above the scene bounds) and returns how many there are in
- * all, so a caller can detect and report a list that did not fit. */
+/* A side of an axis-aligned box; NONE (0) for none. */
+enum rb_scene_side {
+    RB_SIDE_NONE = 0,
+    RB_SIDE_NEG_X,
+    RB_SIDE_POS_X,
+    RB_SIDE_NEG_Y,
+    RB_SIDE_POS_Y,
+    RB_SIDE_NEG_Z,
+    RB_SIDE_POS_Z,
+};
+
+/* What a job decides once for all its frames (lib/scene/setup.c), so that nothing placed from
+ * the scene's extent follows the animated bounds from frame to frame, and a chunk of frames
+ * decides exactly as the whole sequence does. */
+struct rb_scene_setup {
+    struct rb_vec3 bounds_min, bounds_max; /* every pose the selected clips take, over their
+                                            * whole clip time: clip planes, shadow boxes, the
+                                            * fitted camera and the default light use these */
+    uint32_t punctual_count;               /* the scene's (when used) and the job's lights */
+    bool has_emitters;                     /* a drawn primitive's emission is > 0 */
+    bool has_environment;                  /* the environment is not black */
+    enum rb_scene_side room_open_side;     /* the bounds enclose a room open on this side */
+    struct rb_vec3 fit_direction; /* unit, from the bounds' centre towards a fitted camera */
+    bool has_default_light;       /* default_light on, or auto and the frame would be unlit:
+                                   * no punctual light, no emitter, a black environment */
+    struct rb_world_light default_light;
+    char default_light_note[128]; /* "none", or where the default light is (EXR metadata) */
+    uint64_t job_hash; /* job->hash (the settings) with the scene's contents and the environment
+                        * map's pixels: equal hashes, equal frames (what --resume checks) */
+};
+
+/* Decides the setup of a job: the bounds over the selected clips' whole clip time (sampled at
+ * the frame rate, independent of the frame range), the light sources, the default light (logged
+ * once at info level when added) and the fitted camera's side (through the open side of a
+ * room). env_rgba (env_width_px x env_height_px RGBA floats, or NULL) is the loaded
+ * environment map, checked for all-black. Fails only on a bad clip name or out of memory. */
+enum rb_status rb_scene_setup_init(const struct rb_job *job, const struct rb_scene *scene,
+                                   const float *env_rgba, uint32_t env_width_px,
+                                   uint32_t env_height_px, struct rb_scene_setup *out,
+                                   struct rb_err *err);
+
+/* Evaluates the job's camera: a glTF camera node (from pose), keyframes (linear or Catmull-Rom,
+ * clamped at the ends), the scene's first camera, or, with none of these, a view fitted to the
+ * setup's bounds from its fit_direction. Clip planes not given by the job or the file come from
+ * the setup's bounds. Fails only for a camera node name that does not exist or has no camera
+ * (RB_E_INVALID). */
+enum rb_status rb_camera_evaluate(const struct rb_job *job, const struct rb_scene *scene,
+                                  const struct rb_scene_setup *setup,
+                                  const struct rb_scene_pose *pose, double time_s,
+                                  struct rb_camera *out, struct rb_err *err);
+
+/* Writes up to cap lights (scene lights when job->use_scene_lights, then job lights, then the
+ * setup's default light when it has one) and returns how many there are in all, so a caller
+ * can detect and report a list that did not fit. */
 uint32_t rb_scene_world_lights(const struct rb_job *job, const struct rb_scene *scene,
-                               const struct rb_scene_pose *pose, struct rb_world_light *out,
-                               uint32_t cap);
+                               const struct rb_scene_setup *setup, const struct rb_scene_pose *pose,
+                               struct rb_world_light *out, uint32_t cap);
 
 /* Resolves the job's clip names to indices (all names must exist; none given: the first
  * animation, if any). Writes at most cap indices. */

@@ -14,7 +14,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    static const struct rb_job_override overrides[] = {{"resolution", "[8, 8]"}};
+    static const struct rb_job_override overrides[] = {{"resolution", "[8, 8]", NULL}};
     struct rb_job *job = NULL;
     struct rb_err err = RB_ERR_INIT;
     rb_log_set_level(RB_LOG_ERROR);

@@ -9,6 +9,7 @@ check "--version prints the version" grep -q '^raybundle [0-9]' "$T/stdout"
 
 rb --help
 expect_exit 0 "--help exits 0"
+check "--help names --version" grep -q -- '--version' "$T/stdout"
 commands=$(sed -n "s/^    {\"\([a-z]*\)\", cmd_.*/\1/p" cmd/main.c)
 check "the dispatch table lists at least 5 commands" test "$(echo $commands | wc -w)" -ge 5
 for c in $commands; do
@@ -31,12 +32,54 @@ rb render jobs/demo.yaml --bogus
 expect_exit 2 "unknown option exits 2"
 rb render jobs/demo.yaml --size 12
 expect_exit 2 "bad --size exits 2"
-stderr_has "--size expects WxH" "bad --size is explained"
-rb render jobs/demo.yaml --frames 5-2
-expect_exit 2 "backwards --frames exits 2"
+stderr_has "--size '12': expected WxH" "bad --size is explained"
 rb render jobs/demo.yaml --integrator nope
 expect_exit 2 "unknown integrator exits 2"
-stderr_has "unknown integrator 'nope'" "unknown integrator is named"
+stderr_has "--integrator 'nope': 'integrator.name' must be one of direct" \
+    "unknown integrator is named with the choices"
+
+# --frames and --size are sugar for --set: the key table's ranges and types apply, and nothing
+# is rendered (the output directory is not even created).
+bad_option() { # bad_option MESSAGE OPTION...
+    msg=$1
+    shift
+    rb render jobs/demo.yaml --out "$T/never" -q "$@"
+    expect_exit 2 "$* exits 2"
+    stderr_has "$msg" "$*: explained"
+    check "$*: nothing written" test ! -e "$T/never"
+}
+bad_option "--frames '5-2': 'frames.end' (2) must be -1 or >= 'frames.start' (5)" --frames 5-2
+bad_option "--frames '-3': 'frames.start' must be >= 0" --frames -3
+bad_option "--frames '10-': expected A-B or A, and B is missing" --frames 10-
+bad_option "--frames '2.5': 'frames.start' expects an integer" --frames 2.5
+bad_option "--frames '0x10': 'frames.start' expects an integer" --frames 0x10
+bad_option "--frames '1-2-3': 'frames.end' expects an integer" --frames 1-2-3
+bad_option "--size '64x36.5': 'resolution' expects a list of 2 integers" --size 64x36.5
+bad_option "--size '0x36': 'resolution' must be between 1 and 16384" --size 0x36
+bad_option "--size '99999x36': 'resolution' must be between 1 and 16384" --size 99999x36
+# The output pattern: an .exr, with '#' for more than one frame.
+bad_option "img.####' must name an .exr file" --output "$T/never/img.####"
+bad_option "img.####.png' must name an .exr file" --output "$T/never/img.####.png" --frames 0
+bad_option "has no '#' for the frame number, and frames 0 to 3 are more than one" \
+    --output "$T/never/img.exr" --frames 0-3
+# Options the job's integrator would ignore are refused.
+bad_option "--spp applies to the reference integrator only" --spp 4
+bad_option "--time-limit applies to the reference integrator only" --time-limit 3
+bad_option "--threads applies to the reference integrator only" --threads 2
+rb reference jobs/demo.yaml --integrator direct --out "$T/never" -q
+expect_exit 2 "reference --integrator direct exits 2"
+stderr_has "--integrator is for render" "reference --integrator: explained"
+# An output directory that cannot be created is found before rendering.
+: >"$T/file"
+rb render jobs/demo.yaml --frames 0 --out "$T/file/sub" -q
+expect_exit 2 "an output under a plain file exits 2"
+stderr_has "cannot create directory" "an unwritable output is explained"
+# One frame with a fixed name is fine, and the closing line says where it went.
+rb render jobs/demo.yaml --frames 3 --size 32x18 --output "$T/one/still.exr" -q
+expect_exit 0 "one frame to a pattern without '#' renders"
+check "it is written under its number" test -s "$T/one/still.0003.exr"
+check "the closing line says where the frames went" \
+    grep -q "^1 frame (3-3) in $T/one/: 1 rendered, [0-9.]* s\$" "$T/stdout"
 rb render jobs/demo.yaml --device no-such-device --frames 0 --out "$T/dev"
 expect_exit 3 "a device that does not exist exits 3"
 stderr_has "no device matches 'no-such-device'" "missing device is named"

@@ -1,38 +1,82 @@
 #!/bin/sh
-# Resume: a render killed with SIGKILL mid-sequence and restarted with --resume completes with
-# output identical to an uninterrupted run; complete frames are skipped, not re-rendered.
+# Resume: a render killed (SIGKILL, at a fixed frame through RB_TEST_ABORT_AFTER_FRAME) and
+# restarted with --resume completes with output identical to an uninterrupted run; complete
+# frames of the same job are kept, frames rendered by another job (settings, resolution, scene
+# contents, environment map) are rendered again, and the run says so.
 . tests/integration/lib.sh
 
 args="--size 160x90 --frames 0-11 -q"
 rb render jobs/demo.yaml --out "$T/whole" $args
 expect_exit 0 "uninterrupted run renders frames 0-11"
 
-"$RB" render jobs/demo.yaml --out "$T/killed" $args 2>/dev/null &
-pid=$!
-i=0
-while [ ! -e "$T/killed/frame.0003.timing.json" ] && [ $i -lt 1200 ]; do
-    sleep 0.05
-    i=$((i + 1))
-done
-kill -KILL $pid 2>/dev/null
-wait $pid 2>/dev/null
-check "the killed run did not finish" test ! -e "$T/killed/frame.0011.timing.json"
-before=$(ls "$T/killed"/*.exr 2>/dev/null | wc -l)
-check "the killed run left some complete frames" test "$before" -ge 1
+RB_TEST_ABORT_AFTER_FRAME=3 "$RB" render jobs/demo.yaml --out "$T/killed" $args 2>/dev/null
+status=$?
+check "the killed run died by SIGKILL after frame 3 (status $status)" test "$status" -eq 137
+check "the killed run wrote frames 0-3" test -e "$T/killed/frame.0003.timing.json"
+check "the killed run wrote nothing after frame 3" test ! -e "$T/killed/frame.0004.exr"
 
-# A temporary file as a killed writer leaves it (whether or not this kill left one).
+# A temporary file as a killed writer leaves it.
 : >"$T/killed/frame.0009.exr.tmp.4242.exr"
+touch -d '2000-01-01' "$T/killed"/frame.000[0-3].*
 rb render jobs/demo.yaml --out "$T/killed" $args --resume
 expect_exit 0 "--resume completes the sequence"
 check "--resume removes temporary files of the interrupted run" \
     sh -c "! ls '$T/killed' | grep -q '\.tmp\.'"
+check "--resume kept the 4 complete frames and rendered 8" grep -q "8 rendered, 4 kept" "$T/stdout"
+check "the kept frames were not rewritten" \
+    test "$(find "$T/killed" -name 'frame.000[0-3].*' -newermt 2001-01-01 | wc -l)" -eq 0
 for f in 0000 0001 0002 0003 0004 0005 0006 0007 0008 0009 0010 0011; do
     check "frame $f identical to the uninterrupted run" cmp -s "$T/whole/frame.$f.exr" "$T/killed/frame.$f.exr"
 done
 
 # A second --resume finds everything complete and renders nothing.
-touch -d '2000-01-01' "$T/killed/frame.0005.exr"
+touch -d '2000-01-01' "$T/killed"/frame.*
 rb render jobs/demo.yaml --out "$T/killed" $args --resume
 expect_exit 0 "a second --resume exits 0"
-check "complete frames are not rewritten" test "$(find "$T/killed/frame.0005.exr" -newermt 2001-01-01 | wc -l)" -eq 0
+check "a second --resume renders nothing" grep -q "0 rendered, 12 kept" "$T/stdout"
+check "complete frames are not rewritten" \
+    test "$(find "$T/killed" -name 'frame.*' -newermt 2001-01-01 | wc -l)" -eq 0
+
+# Another setting: every frame is rendered again, and the run says so.
+rb render jobs/demo.yaml --out "$T/killed" $args --resume --set integrator.direct.shadow_bias=0.004
+expect_exit 0 "--resume with another shadow bias exits 0"
+check "another setting: all 12 frames rendered again" grep -q "12 rendered, 0 kept, 12 rendered again" "$T/stdout"
+check "frame 5 now differs from the first job's" \
+    sh -c "! cmp -s '$T/whole/frame.0005.exr' '$T/killed/frame.0005.exr'"
+rb render jobs/demo.yaml --out "$T/killed" --size 160x90 --frames 0-11 --resume \
+    --set integrator.direct.shadow_bias=0.004
+expect_exit 0 "--resume without -q"
+stderr_has "frame 0 (1/12) already complete, skipped" "the progress says which frames are kept"
+rb render jobs/demo.yaml --out "$T/killed" --size 160x90 --frames 0-11 --resume
+stderr_has "frame 0 was rendered by another job or setting: rendering it again" \
+    "the progress says which frames are rendered again"
+
+# Another resolution of the same job: rendered again.
+rb render jobs/demo.yaml --out "$T/killed" --size 128x72 --frames 0-1 -q --resume
+check "another resolution: rendered again" grep -q "2 rendered, 0 kept, 2 rendered again" "$T/stdout"
+
+# The scene's contents, not its path: a copy of the demo whose buffer changes under the same name.
+mkdir -p "$T/scene"
+cp jobs/demo/room.gltf jobs/demo/room.bin "$T/scene/"
+sed "s#^scene: .*#scene: $T/scene/room.gltf#" jobs/demo.yaml >"$T/scene/job.yaml"
+rb render "$T/scene/job.yaml" --out "$T/sc" --size 64x36 --frames 0-1 -q
+expect_exit 0 "the copied scene renders"
+rb render "$T/scene/job.yaml" --out "$T/sc" --size 64x36 --frames 0-1 -q --resume
+check "the unchanged scene: frames kept" grep -q "0 rendered, 2 kept" "$T/stdout"
+# The lowest byte of the first vertex position (the buffer starts with positions): a change far
+# below what shows in a pixel, still a different scene.
+printf '\177' | dd of="$T/scene/room.bin" bs=1 seek=0 conv=notrunc 2>/dev/null
+rb render "$T/scene/job.yaml" --out "$T/sc" --size 64x36 --frames 0-1 -q --resume
+expect_exit 0 "the changed scene renders"
+check "a changed scene buffer: frames rendered again" grep -q "2 rendered, 0 kept, 2 rendered again" "$T/stdout"
+
+# The environment map's pixels, not its path.
+oiiotool --pattern constant:color=0.2,0.3,0.4 16x8 3 -d float -o "$T/scene/sky.exr"
+printf 'environment: {map: sky.exr}\n' >>"$T/scene/job.yaml"
+rb render "$T/scene/job.yaml" --out "$T/env" --size 64x36 --frames 0 -q
+expect_exit 0 "the job with an environment map renders"
+oiiotool --pattern constant:color=0.4,0.3,0.2 16x8 3 -d float -o "$T/scene/sky.exr"
+rb render "$T/scene/job.yaml" --out "$T/env" --size 64x36 --frames 0 -q --resume
+check "a changed environment map: the frame is rendered again" \
+    grep -q "1 rendered, 0 kept, 1 rendered again" "$T/stdout"
 done_testing

@@ -1,5 +1,6 @@
 #!/bin/sh
-# SIGINT finishes the frame in flight and stops with status 1, leaving only complete files;
+# SIGINT and SIGTERM finish the frame in flight and stop with status 1, leaving only complete
+# files; an interrupted reference frame is not written;
 # `make install` honours PREFIX and DESTDIR.
 . tests/integration/lib.sh
 
@@ -20,6 +21,35 @@ check "no temporary file is left" sh -c "! ls '$T/int' | grep -q tmp"
 for exr in "$T"/int/*.exr; do
     check "$(basename "$exr") is complete" sh -c "oiiotool --info '$exr' >/dev/null"
 done
+
+# SIGTERM (a scheduler's stop) is handled like SIGINT.
+"$RB" render jobs/demo.yaml --size 160x90 --frames 0-47 --out "$T/term" -q 2>"$T/stderr" &
+pid=$!
+i=0
+while [ ! -e "$T/term/frame.0001.timing.json" ] && [ $i -lt 600 ]; do
+    sleep 0.1
+    i=$((i + 1))
+done
+kill -TERM $pid
+wait $pid
+status=$?
+expect_exit 1 "SIGTERM stops the render with status 1"
+stderr_has "interrupted" "the SIGTERM is reported"
+check "no temporary file is left after SIGTERM" sh -c "! ls '$T/term' | grep -q tmp"
+
+# SIGINT during a reference frame: sampling stops, and the partial frame is not written under
+# the frame's name, so --resume renders it again.
+"$RB" reference jobs/demo.yaml --size 96x54 --frames 0 --spp 65536 --out "$T/ref" -q \
+    2>"$T/stderr" &
+pid=$!
+sleep 2
+kill -INT $pid
+wait $pid
+status=$?
+expect_exit 1 "SIGINT stops a reference frame with status 1"
+stderr_has "was not written" "the partial reference frame is reported as not written"
+check "no reference frame was written" test ! -e "$T/ref/frame.0000.exr"
+check "no reference timing sidecar was written" test ! -e "$T/ref/frame.0000.timing.json"
 
 stamp() { ls -l --time-style=+%s.%N "$BUILD/raybundle" "$BUILD/libraybundle.a" "$BUILD/.flags"; }
 stamp >"$T/before"

@@ -20,6 +20,7 @@ struct fixture {
     struct rb_scene_camera cam;
     struct rb_mat4 world[2];
     struct rb_scene_pose pose;
+    struct rb_scene_setup setup;
     struct rb_job job;
 };
 
@@ -43,8 +44,8 @@ static void build(struct fixture *f)
     f->world[0] = rb_mat4_identity();
     float h = sqrtf(0.5f);
     f->world[1] = rb_mat4_trs(rb_v3(1, 2, 3), (struct rb_quat){0, h, 0, h}, rb_v3(2, 2, 2));
-    f->pose = (struct rb_scene_pose){
-        .node_world = f->world, .bounds_min = {-1, -1, -1}, .bounds_max = {1, 1, 1}};
+    f->pose = (struct rb_scene_pose){.node_world = f->world};
+    f->setup = (struct rb_scene_setup){.bounds_min = {-1, -1, -1}, .bounds_max = {1, 1, 1}};
     f->s = (struct rb_scene){
         .nodes = f->nodes, .node_count = 2, .cameras = &f->cam, .camera_count = 1};
     f->job.width_px = 1600;
@@ -55,7 +56,7 @@ static struct rb_camera eval(struct fixture *f, double t)
 {
     struct rb_camera cam;
     struct rb_err err = RB_ERR_INIT;
-    if (rb_camera_evaluate(&f->job, &f->s, &f->pose, t, &cam, &err))
+    if (rb_camera_evaluate(&f->job, &f->s, &f->setup, &f->pose, t, &cam, &err))
         fail_msg("camera: %s", err.msg);
     return cam;
 }
@@ -232,10 +233,12 @@ static void test_node_camera_errors(void **state)
     struct rb_camera c;
     struct rb_err err = RB_ERR_INIT;
     f.job.camera.node = "Nope";
-    assert_int_equal(rb_camera_evaluate(&f.job, &f.s, &f.pose, 0, &c, &err), RB_E_INVALID);
+    assert_int_equal(rb_camera_evaluate(&f.job, &f.s, &f.setup, &f.pose, 0, &c, &err),
+                     RB_E_INVALID);
     assert_string_equal(err.msg, "camera node 'Nope' not found");
     f.job.camera.node = "Box";
-    assert_int_equal(rb_camera_evaluate(&f.job, &f.s, &f.pose, 0, &c, &err), RB_E_INVALID);
+    assert_int_equal(rb_camera_evaluate(&f.job, &f.s, &f.setup, &f.pose, 0, &c, &err),
+                     RB_E_INVALID);
     assert_string_equal(err.msg, "node 'Box' has no camera");
 }
 
@@ -266,21 +269,21 @@ static void test_fit(void **state)
     assert_float_equal(c.fov_y_rad, fov, 1e-6f);
     assert_v3(c.position, dir.x * d, dir.y * d, dir.z * d, 1e-4f);
     assert_v3(rb_mat4_point(&c.world_to_camera, rb_v3(0, 0, 0)), 0, 0, -d, 1e-4f);
-    assert_fits(&c, f.pose.bounds_min, f.pose.bounds_max, 16.0f / 9.0f);
+    assert_fits(&c, f.setup.bounds_min, f.setup.bounds_max, 16.0f / 9.0f);
 
     /* off-center, flat bounds and a portrait image: still all in view */
-    f.pose.bounds_min = rb_v3(95, -1, -20);
-    f.pose.bounds_max = rb_v3(105, 1, 20);
+    f.setup.bounds_min = rb_v3(95, -1, -20);
+    f.setup.bounds_max = rb_v3(105, 1, 20);
     f.job.width_px = 600;
     f.job.height_px = 1000;
     f.job.camera.fov_y_deg = 60;
     c = eval(&f, 0.0);
     assert_v3(rb_mat4_point(&c.world_to_camera, rb_v3(100, 0, 0)), 0, 0,
               -rb_v3_length(rb_v3_sub(c.position, rb_v3(100, 0, 0))), 1e-3f);
-    assert_fits(&c, f.pose.bounds_min, f.pose.bounds_max, 0.6f);
+    assert_fits(&c, f.setup.bounds_min, f.setup.bounds_max, 0.6f);
 
     /* empty bounds at the origin: a finite camera with sane planes */
-    f.pose.bounds_min = f.pose.bounds_max = rb_v3(0, 0, 0);
+    f.setup.bounds_min = f.setup.bounds_max = rb_v3(0, 0, 0);
     c = eval(&f, 0.0);
     assert_true(isfinite(c.position.x) && c.z_near > 0.0f && c.z_far > c.z_near);
 }

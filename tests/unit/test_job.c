@@ -408,16 +408,16 @@ static void test_overrides(void **state)
     const char *text = "scene: empty.gltf\nframes: {start: 0, end: 9, rate: 25}\n"
                        "lights: [{type: point}, {type: spot}]\n";
     struct rb_job_override set[] = {
-        {"integrator.direct.shadow_size", "512"}, /* nested scalar */
-        {"resolution", "[320, 200]"},             /* list */
-        {"frames", "{start: 1, end: 4}"},         /* mapping: merges, rate stays */
-        {"integrator.name", "reference"},         /* enum */
-        {"scene_lights", "false"},                /* bool */
-        {"lights", "[{type: directional, direction: [0, 0, -3]}]"}, /* replaces the list */
-        {"animation.clips", "[Run]"},
-        {"camera.node", "Cam"},
-        {"camera.node", ""},            /* an empty value unsets an optional string */
-        {"environment.map", "sky.hdr"}, /* relative to the job's directory */
+        {"integrator.direct.shadow_size", "512", NULL}, /* nested scalar */
+        {"resolution", "[320, 200]", NULL},             /* list */
+        {"frames", "{start: 1, end: 4}", NULL},         /* mapping: merges, rate stays */
+        {"integrator.name", "reference", NULL},         /* enum */
+        {"scene_lights", "false", NULL},                /* bool */
+        {"lights", "[{type: directional, direction: [0, 0, -3]}]", NULL}, /* replaces the list */
+        {"animation.clips", "[Run]", NULL},
+        {"camera.node", "Cam", NULL},
+        {"camera.node", "", NULL},            /* an empty value unsets an optional string */
+        {"environment.map", "sky.hdr", NULL}, /* relative to the job's directory */
     };
     struct rb_job *job = must_parse(text, set, sizeof(set) / sizeof(set[0]));
     assert_int_equal(job->integrator.direct.shadow_size_px, 512);
@@ -439,7 +439,7 @@ static void test_overrides(void **state)
 
     /* Overrides apply in order: the last one wins; an empty list clears. */
     struct rb_job_override order[] = {
-        {"frames.rate", "30"}, {"frames.rate", "48"}, {"lights", "[]"}};
+        {"frames.rate", "30", NULL}, {"frames.rate", "48", NULL}, {"lights", "[]", NULL}};
     job = must_parse(text, order, 3);
     assert_float_equal(job->rate_fps, 48, 0);
     assert_int_equal(job->light_count, 0);
@@ -447,7 +447,7 @@ static void test_overrides(void **state)
     rb_job_destroy(job);
 
     /* A --set can supply a key the file lacks. */
-    struct rb_job_override scene[] = {{"scene", "empty.gltf"}};
+    struct rb_job_override scene[] = {{"scene", "empty.gltf", NULL}};
     job = must_parse("resolution: [8, 8]\n", scene, 1);
     assert_string_equal(job->scene_path, JOBS "/empty.gltf");
     rb_job_destroy(job);
@@ -457,33 +457,33 @@ static void test_override_errors(void **state)
 {
     (void)state;
     const char *text = "scene: empty.gltf\n";
-    struct rb_job_override unknown[] = {{"integrator.direct.shadow_sise", "512"}};
+    struct rb_job_override unknown[] = {{"integrator.direct.shadow_sise", "512", NULL}};
     expect_error(text, unknown, 1, RB_E_PARSE,
                  "--set:1:19: unknown key 'shadow_sise' in 'integrator.direct'; "
                  "did you mean 'shadow_size'?");
-    struct rb_job_override top[] = {{"samples", "4"}};
+    struct rb_job_override top[] = {{"samples", "4", NULL}};
     expect_error(text, top, 1, RB_E_PARSE, "--set:1:1: unknown key 'samples'");
-    struct rb_job_override leaf[] = {{"resolution.x", "3"}};
+    struct rb_job_override leaf[] = {{"resolution.x", "3", NULL}};
     expect_error(text, leaf, 1, RB_E_PARSE, "--set:1:12: unknown key 'x' in 'resolution'");
-    struct rb_job_override item[] = {{"lights[].type", "point"}};
+    struct rb_job_override item[] = {{"lights[].type", "point", NULL}};
     expect_error(text, item, 1, RB_E_PARSE,
                  "--set:1:1: unknown key 'lights[]'; did you mean 'lights'?");
 
     /* The column counts from the start of "key=value". */
-    struct rb_job_override bad[] = {{"resolution", "[1, 2]"}, {"frames.rate", "abc"}};
+    struct rb_job_override bad[] = {{"resolution", "[1, 2]", NULL}, {"frames.rate", "abc", NULL}};
     expect_error(text, bad, 2, RB_E_PARSE, "--set:2:13: 'frames.rate' expects a number");
-    struct rb_job_override range[] = {{"resolution", "[64, 99999]"}};
+    struct rb_job_override range[] = {{"resolution", "[64, 99999]", NULL}};
     expect_error(text, range, 1, RB_E_INVALID,
                  "--set:1:17: 'resolution' must be between 1 and 16384");
-    struct rb_job_override nested[] = {{"frames", "{strat: 1}"}};
+    struct rb_job_override nested[] = {{"frames", "{strat: 1}", NULL}};
     expect_error(text, nested, 1, RB_E_PARSE,
                  "--set:1:9: unknown key 'strat' in 'frames'; did you mean 'start'?");
-    struct rb_job_override conflict[] = {{"camera.node", "Cam"}};
+    struct rb_job_override conflict[] = {{"camera.node", "Cam", NULL}};
     expect_error("scene: empty.gltf\ncamera:\n  keys:\n"
                  "    - {t: 0, position: [0, 0, 1], look_at: [0, 0, 0]}\n",
                  conflict, 1, RB_E_INVALID,
                  "--set:1:13: 'camera.node' and 'camera.keys' are mutually exclusive");
-    struct rb_job_override missing[] = {{"scene", "nope.glb"}};
+    struct rb_job_override missing[] = {{"scene", "nope.glb", NULL}};
     expect_error(text, missing, 1, RB_E_IO, "--set:1:7: scene file '" JOBS "/nope.glb' not found");
 }
 
@@ -512,8 +512,8 @@ static void test_quick_look(void **state)
     rb_job_destroy(job);
 
     /* Overrides still apply; paths in them are relative to the current directory. */
-    struct rb_job_override set[] = {{"resolution", "[64, 32]"},
-                                    {"environment.map", JOBS "/sky.hdr"}};
+    struct rb_job_override set[] = {{"resolution", "[64, 32]", NULL},
+                                    {"environment.map", JOBS "/sky.hdr", NULL}};
     job = must_load(fox, set, 2);
     assert_int_equal(job->width_px, 64);
     assert_int_equal(job->height_px, 32);
@@ -561,25 +561,25 @@ static void test_hash(void **state)
     uint64_t base = hash_of(text, NULL, 0);
 
     /* Chunks of one sequence, written anywhere, share the hash. */
-    struct rb_job_override chunk[] = {{"frames", "{start: 50, end: 74}"},
-                                      {"output", "elsewhere/f.####.exr"}};
+    struct rb_job_override chunk[] = {{"frames", "{start: 50, end: 74}", NULL},
+                                      {"output", "elsewhere/f.####.exr", NULL}};
     assert_true(hash_of(text, chunk, 2) == base);
     /* Previews and color management do not change the EXR. */
-    struct rb_job_override preview[] = {{"color.preview", "true"}};
+    struct rb_job_override preview[] = {{"color.preview", "true", NULL}};
     assert_true(hash_of(text, preview, 1) == base);
 
     const struct rb_job_override changes[][1] = {
-        {{"resolution", "[641, 360]"}},
-        {{"frames.rate", "25"}},
-        {{"camera.fov_y_deg", "41"}},
-        {{"camera.node", "Cam"}},
-        {{"animation.clips", "[Walk]"}},
-        {{"animation.loop", "false"}},
-        {{"lights", "[{type: point}]"}},
-        {{"scene_lights", "false"}},
-        {{"environment.intensity", "2"}},
-        {{"integrator.name", "bdpt"}},
-        {{"integrator.direct.shadow_bias", "0.003"}},
+        {{"resolution", "[641, 360]", NULL}},
+        {{"frames.rate", "25", NULL}},
+        {{"camera.fov_y_deg", "41", NULL}},
+        {{"camera.node", "Cam", NULL}},
+        {{"animation.clips", "[Walk]", NULL}},
+        {{"animation.loop", "false", NULL}},
+        {{"lights", "[{type: point}]", NULL}},
+        {{"scene_lights", "false", NULL}},
+        {{"environment.intensity", "2", NULL}},
+        {{"integrator.name", "bdpt", NULL}},
+        {{"integrator.direct.shadow_bias", "0.003", NULL}},
     };
     for (size_t i = 0; i < sizeof(changes) / sizeof(changes[0]); i++) {
         if (hash_of(text, changes[i], 1) == base)

@@ -1688,7 +1688,7 @@ static void test_passes(void **state)
     assert_memory_equal(stopped, four, (size_t)8 * 8 * RB_OUT_FLOATS * sizeof(float));
     assert_true(memcmp(stopped, full, (size_t)8 * 8 * RB_OUT_FLOATS * sizeof(float)) != 0);
     /* a time limit that has run out stops after the first pass */
-    struct rb_job_override o = {"integrator.reference.time_limit_s", "1e-9"};
+    struct rb_job_override o = {"integrator.reference.time_limit_s", "1e-9", NULL};
     struct rb_job *jt = NULL;
     char text[1024];
     snprintf(text, sizeof(text), "scene: scenes/features.gltf\noutput: out.####.exr\n" BUSY_JOB, 8,

@@ -557,8 +557,9 @@ static void test_features_lights(void **state)
     job.lights = &jl;
     job.light_count = 1;
     struct rb_world_light out[5];
+    struct rb_scene_setup setup = {0}; /* no default light */
     memset(out, 0x5a, sizeof(out));
-    assert_int_equal(rb_scene_world_lights(&job, s, p, out, 5), 4);
+    assert_int_equal(rb_scene_world_lights(&job, s, &setup, p, out, 5), 4);
     /* SunNode rotated -90 degrees about X: light travels down */
     assert_int_equal(out[0].type, RB_LIGHT_DIRECTIONAL);
     assert_float_equal(out[0].direction.y, -1.0f, 1e-6f);
@@ -581,26 +582,35 @@ static void test_features_lights(void **state)
     /* a short list: the count says how many there are, only cap are written */
     struct rb_world_light few[2];
     memset(few, 0x5a, sizeof(few));
-    assert_int_equal(rb_scene_world_lights(&job, s, p, few, 1), 4);
+    assert_int_equal(rb_scene_world_lights(&job, s, &setup, p, few, 1), 4);
     unsigned char pattern[sizeof(few[1])];
     memset(pattern, 0x5a, sizeof(pattern));
     assert_memory_equal(&few[1], pattern, sizeof(pattern));
 
-    /* no lights at all: one default point light above, right of and in front of the bounds,
-     * two bounding radii from the center, irradiance ~1 at the center */
-    job = (struct rb_job){0};
+    /* no lights at all, default_light on: one default point light above, right of and in front
+     * of the job's bounds, two bounding radii from the center, irradiance ~1 at the center,
+     * after the other lights; logged at info level */
+    job = (struct rb_job){.default_light = RB_DEFAULT_LIGHT_ON, .rate_fps = 24};
     log_text[0] = '\0';
-    assert_int_equal(rb_scene_world_lights(&job, s, p, out, 5), 1);
+    struct rb_err err = RB_ERR_INIT;
+    assert_int_equal(rb_scene_setup_init(&job, s, NULL, 0, 0, &setup, &err), RB_OK);
+    assert_true(setup.has_default_light);
+    assert_int_equal(rb_scene_world_lights(&job, s, &setup, p, out, 5), 1);
     assert_int_equal(out[0].type, RB_LIGHT_POINT);
-    struct rb_vec3 c = rb_v3_scale(rb_v3_add(p->bounds_min, p->bounds_max), 0.5f);
-    float radius = 0.5f * rb_v3_length(rb_v3_sub(p->bounds_max, p->bounds_min));
+    struct rb_vec3 c = rb_v3_scale(rb_v3_add(setup.bounds_min, setup.bounds_max), 0.5f);
+    float radius = 0.5f * rb_v3_length(rb_v3_sub(setup.bounds_max, setup.bounds_min));
     struct rb_vec3 off = rb_v3_sub(out[0].position, c);
     float dist = rb_v3_length(off);
     assert_float_equal(dist, 2.0f * radius, 1e-4f * radius);
     assert_true(off.x > 0.0f && off.y > 0.0f && off.z > 0.0f);
     assert_true(off.y > off.x && off.y > off.z);
     assert_float_equal(out[0].color[0] / (dist * dist), 1.0f, 1e-4f);
-    assert_non_null(strstr(log_text, "default point light"));
+    assert_non_null(strstr(log_text, "default light"));
+    /* off: none, even with nothing else */
+    job.default_light = RB_DEFAULT_LIGHT_OFF;
+    assert_int_equal(rb_scene_setup_init(&job, s, NULL, 0, 0, &setup, &err), RB_OK);
+    assert_false(setup.has_default_light);
+    assert_int_equal(rb_scene_world_lights(&job, s, &setup, p, out, 5), 0);
     rb_scene_pose_destroy(p);
     rb_scene_destroy(s);
 }
