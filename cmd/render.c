@@ -71,6 +71,7 @@ struct frame {
     struct rb_mat4 world_to_camera, world_to_ndc;
     uint32_t spp;       /* the reference: samples reached */
     uint64_t ray_count; /* the reference: rays traced */
+    uint32_t nonfinite_count;
 };
 
 static void usage(FILE *f, const char *command)
@@ -461,6 +462,7 @@ static enum rb_status write_timing(const char *exr_path, const struct rb_job *jo
         .height_px = r->height_px,
         .spp = r->spp,
         .ray_count = r->ray_count,
+        .nonfinite_count = r->nonfinite_count,
     };
     return rb_io_timing_write(path, &t, err);
 }
@@ -504,7 +506,8 @@ static enum rb_status backend_render(struct backend *b, int f, struct frame *out
                               .world_to_camera = r.world_to_camera,
                               .world_to_ndc = r.world_to_ndc,
                               .spp = r.spp,
-                              .ray_count = r.ray_count};
+                              .ray_count = r.ray_count,
+                              .nonfinite_count = r.nonfinite_count};
         out->passes[0] = (struct rb_io_pass_time){"trace", 0.0, r.render_s * 1e3};
         return RB_OK;
     }
@@ -519,7 +522,8 @@ static enum rb_status backend_render(struct backend *b, int f, struct frame *out
                           .pixels = r.pixels,
                           .pass_count = r.pass_count,
                           .world_to_camera = r.world_to_camera,
-                          .world_to_ndc = r.world_to_ndc};
+                          .world_to_ndc = r.world_to_ndc,
+                          .nonfinite_count = r.nonfinite_count};
     for (uint32_t i = 0; i < r.pass_count; i++) {
         rb_strlcpy(out->pass_names[i], r.passes[i].name, sizeof(out->pass_names[i]));
         out->passes[i] = (struct rb_io_pass_time){out->pass_names[i], r.passes[i].gpu_ms, 0};

@@ -1,6 +1,7 @@
 // output: packs the frame's layers into one buffer for a single readback, in the order
 // RB_OUT_* gives (beauty RGBA, direct, indirect, albedo, normal, depth, motion). The direct
-// integrator has no indirect light: zero.
+// integrator has no indirect light: zero. Every value written that is NaN or infinite is
+// counted in `nonfinite` (an integer atomic add, so the count does not depend on the order).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "shared.h"
@@ -15,6 +16,17 @@ layout(binding = 4, rgba32f) uniform readonly image2D gb_normal;
 layout(binding = 5, rgba32f) uniform readonly image2D gb_position;
 layout(binding = 6, rgba32f) uniform readonly image2D gb_motion;
 layout(std430, binding = 7) writeonly buffer Out { float o[]; };
+layout(std430, binding = 8) buffer Nonfinite { uint nonfinite; };
+
+uint bad = 0u;
+
+// Writes one float and counts it when its exponent is all ones (NaN or Inf): a test of the bits,
+// which no floating-point optimization can fold away.
+void put(uint i, float x)
+{
+    o[i] = x;
+    bad += (floatBitsToUint(x) & 0x7f800000u) == 0x7f800000u ? 1u : 0u;
+}
 
 void main()
 {
@@ -30,24 +42,26 @@ void main()
     vec3 n = hit ? imageLoad(gb_normal, ip).xyz : vec3(0.0);
     vec2 m = hit ? imageLoad(gb_motion, ip).xy : vec2(0.0);
     uint base = (px.y * g.size.x + px.x) * RB_OUT_FLOATS;
-    o[base + RB_OUT_BEAUTY + 0] = b.r;
-    o[base + RB_OUT_BEAUTY + 1] = b.g;
-    o[base + RB_OUT_BEAUTY + 2] = b.b;
-    o[base + RB_OUT_BEAUTY + 3] = hit ? 1.0 : 0.0;
-    o[base + RB_OUT_DIRECT + 0] = d.r;
-    o[base + RB_OUT_DIRECT + 1] = d.g;
-    o[base + RB_OUT_DIRECT + 2] = d.b;
-    o[base + RB_OUT_INDIRECT + 0] = 0.0;
-    o[base + RB_OUT_INDIRECT + 1] = 0.0;
-    o[base + RB_OUT_INDIRECT + 2] = 0.0;
-    o[base + RB_OUT_ALBEDO + 0] = a.r;
-    o[base + RB_OUT_ALBEDO + 1] = a.g;
-    o[base + RB_OUT_ALBEDO + 2] = a.b;
-    o[base + RB_OUT_NORMAL + 0] = n.x;
-    o[base + RB_OUT_NORMAL + 1] = n.y;
-    o[base + RB_OUT_NORMAL + 2] = n.z;
-    o[base + RB_OUT_DEPTH] = hit ? pos.w : 0.0;
-    o[base + RB_OUT_MOTION + 0] = m.x;
-    o[base + RB_OUT_MOTION + 1] = m.y;
-    o[base + RB_OUT_FLOATS - 1] = 0.0;
+    put(base + RB_OUT_BEAUTY + 0, b.r);
+    put(base + RB_OUT_BEAUTY + 1, b.g);
+    put(base + RB_OUT_BEAUTY + 2, b.b);
+    put(base + RB_OUT_BEAUTY + 3, hit ? 1.0 : 0.0);
+    put(base + RB_OUT_DIRECT + 0, d.r);
+    put(base + RB_OUT_DIRECT + 1, d.g);
+    put(base + RB_OUT_DIRECT + 2, d.b);
+    put(base + RB_OUT_INDIRECT + 0, 0.0);
+    put(base + RB_OUT_INDIRECT + 1, 0.0);
+    put(base + RB_OUT_INDIRECT + 2, 0.0);
+    put(base + RB_OUT_ALBEDO + 0, a.r);
+    put(base + RB_OUT_ALBEDO + 1, a.g);
+    put(base + RB_OUT_ALBEDO + 2, a.b);
+    put(base + RB_OUT_NORMAL + 0, n.x);
+    put(base + RB_OUT_NORMAL + 1, n.y);
+    put(base + RB_OUT_NORMAL + 2, n.z);
+    put(base + RB_OUT_DEPTH, hit ? pos.w : 0.0);
+    put(base + RB_OUT_MOTION + 0, m.x);
+    put(base + RB_OUT_MOTION + 1, m.y);
+    put(base + RB_OUT_FLOATS - 1, 0.0);
+    if (bad > 0u)
+        atomicAdd(nonfinite, bad);
 }

@@ -195,6 +195,10 @@ enum rb_status rb_integrator_render(struct rb_integrator *it, int frame_index,
     struct rb_mat4 proj = rb_frame_projection(frame, &it->cur.camera);
     out->world_to_camera = it->cur.camera.world_to_camera;
     out->world_to_ndc = rb_mat4_mul(&proj, &it->cur.camera.world_to_camera);
+    out->nonfinite_count = rb_pass_output_nonfinite_count(it->output);
+    if (out->nonfinite_count)
+        rb_log(RB_LOG_WARN, "frame %d: %u non-finite values (NaN or Inf) in the output",
+               frame_index, out->nonfinite_count);
     return RB_OK;
 }
 

@@ -36,6 +36,7 @@ struct rb_frame_result {
     struct rb_pass_timing passes[RB_GPU_MAX_PASSES];
     uint32_t pass_count;
     struct rb_mat4 world_to_camera, world_to_ndc; /* column-major; NDC as Vulkan: y down, z 0..1 */
+    uint32_t nonfinite_count; /* NaN or infinite floats in pixels (all layers); 0 when clean */
 };
 
 /* Creates the integrator the job names, uploading the scene. RB_E_UNSUPPORTED for an
@@ -45,7 +46,8 @@ enum rb_status rb_integrator_create(const struct rb_integrator_desc *desc,
                                     struct rb_integrator **out, struct rb_err *err);
 
 /* Renders one frame (time = frame / rate) and reads it back. Frames may come in any order; the
- * result of a frame never depends on which frames were rendered before it. */
+ * result of a frame never depends on which frames were rendered before it. A frame with NaN or
+ * infinite values is still a result: it is counted in nonfinite_count and logged as a warning. */
 enum rb_status rb_integrator_render(struct rb_integrator *it, int frame,
                                     struct rb_frame_result *out, struct rb_err *err);
 

@@ -848,6 +848,7 @@ enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t
     text_puts(&t, ",\n  \"integrator\": ");
     json_string(&t, tm->integrator);
     text_printf(&t, ",\n  \"width\": %u,\n  \"height\": %u", tm->width_px, tm->height_px);
+    text_printf(&t, ",\n  \"nonfinite\": %u", tm->nonfinite_count);
     if (tm->spp)
         text_printf(&t, ",\n  \"spp\": %u", tm->spp);
     if (tm->ray_count)

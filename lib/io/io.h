@@ -130,11 +130,13 @@ struct rb_io_timing {
     uint32_t width_px, height_px;
     uint32_t spp;       /* samples per pixel reached (the reference); written when > 0 */
     uint64_t ray_count; /* rays traced (the reference); written when > 0 */
+    /* NaN or infinite values in the frame's layers; always written */
+    uint32_t nonfinite_count;
 };
 
 /* Writes NAME.####.timing.json atomically:
  * {"frame": 12, "time_s": 0.5, "passes": [{"name": "gbuffer", "gpu_ms": 1.25}, ...],
- *  "wall_ms": 40.1, "device": "...", "driver": "...", ...}. */
+ *  "wall_ms": 40.1, "device": "...", "driver": "...", ..., "nonfinite": 0}. */
 enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t,
                                   struct rb_err *err);
 

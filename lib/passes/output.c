@@ -1,5 +1,6 @@
 /* output: packs beauty and the named layers into one host-visible buffer, so a frame is read
- * back with a single copy (the order is RB_OUT_* in shaders/common/shared.h). */
+ * back with a single copy (the order is RB_OUT_* in shaders/common/shared.h), and counts the
+ * NaN and infinite values it writes, so none reaches a file unnoticed. */
 #include "passes/passes.h"
 
 #include <stdlib.h>
@@ -10,6 +11,7 @@ struct rb_pass_output {
     struct rb_gpu *gpu;
     struct rb_gpu_layout layout;
     VkPipeline pipeline;
+    struct rb_gpu_buffer nonfinite; /* one uint32, host-visible: zeroed, then added to */
 };
 
 static const VkDescriptorType bindings[] = {
@@ -17,6 +19,7 @@ static const VkDescriptorType bindings[] = {
     VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,  VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
     VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,  VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
     VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,  VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
 };
 
 enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output **out,
@@ -26,7 +29,16 @@ enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output *
     if (!p)
         return rb_errf(err, RB_E_NOMEM, "out of memory");
     p->gpu = gpu;
-    enum rb_status st = rb_gpu_layout_init(gpu, bindings, 8, 0, &p->layout, err);
+    enum rb_status st = rb_gpu_layout_init(gpu, bindings, 9, 0, &p->layout, err);
+    if (st == RB_OK)
+        st = rb_gpu_buffer_init(
+            gpu,
+            &(struct rb_gpu_buffer_desc){.size_bytes = sizeof(uint32_t),
+                                         .usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+                                                  VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                         .is_host_visible = true,
+                                         .debug_name = "output.nonfinite"},
+            &p->nonfinite, err);
     if (st == RB_OK)
         st = rb_gpu_compute_pipeline(gpu, rb_spv_output_comp, sizeof(rb_spv_output_comp),
                                      p->layout.pipeline_layout, "output", &p->pipeline, err);
@@ -55,6 +67,19 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
         rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, images[i]->view, VK_NULL_HANDLE,
                           VK_IMAGE_LAYOUT_GENERAL);
     rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &frame->readback);
+    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &p->nonfinite);
+    /* The count starts from zero on the device, ordered before the shader's atomic adds. */
+    vkCmdFillBuffer(cmd, p->nonfinite.buffer, 0, VK_WHOLE_SIZE, 0);
+    VkMemoryBarrier2 zeroed = {
+        .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
+        .srcStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
+        .srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT,
+        .dstStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+        .dstAccessMask = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+    };
+    vkCmdPipelineBarrier2(cmd, &(VkDependencyInfo){.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
+                                                   .memoryBarrierCount = 1,
+                                                   .pMemoryBarriers = &zeroed});
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
     rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout.pipeline_layout,
                          &b);
@@ -73,12 +98,18 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
     vkCmdPipelineBarrier2(cmd, &dep);
 }
 
+uint32_t rb_pass_output_nonfinite_count(const struct rb_pass_output *p)
+{
+    return *(const uint32_t *)p->nonfinite.mapped;
+}
+
 void rb_pass_output_destroy(struct rb_pass_output *p)
 {
     if (!p)
         return;
     if (p->pipeline)
         vkDestroyPipeline(p->gpu->device, p->pipeline, NULL);
+    rb_gpu_buffer_release(p->gpu, &p->nonfinite);
     rb_gpu_layout_release(p->gpu, &p->layout);
     free(p);
 }

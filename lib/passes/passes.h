@@ -109,9 +109,13 @@ void rb_pass_direct_destroy(struct rb_pass_direct *p);
 struct rb_pass_output;
 enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output **out,
                                      struct rb_err *err);
-/* Packs beauty and layers into frame->readback. */
+/* Packs beauty and layers into frame->readback, and counts the NaN and infinite floats among
+ * them. */
 void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
                            const struct rb_frame *frame);
+/* After the frame's submit has completed: how many floats the last record wrote to the readback
+ * were NaN or infinite (0 for a clean frame). */
+uint32_t rb_pass_output_nonfinite_count(const struct rb_pass_output *p);
 void rb_pass_output_destroy(struct rb_pass_output *p);
 
 #endif

@@ -23,12 +23,13 @@ static bool brdf_terms(const float n[3], const float v[3], const float l[3], flo
     float h[3] = {l[0] + v[0], l[1] + v[1], l[2] + v[2]};
     float hl = sqrtf(rb_ref_dot(h, h));
     if (!(hl > 0.0f))
-        return false; /* l == -v: normalize() has no answer (GLSL gives NaN) */
+        return false; /* l == -v: no half vector (the GLSL returns zero too) */
     h[0] /= hl;
     h[1] /= hl;
     h[2] /= hl;
     float ndh = rb_ref_maxf(rb_ref_dot(n, h), 0.0f);
-    float vdh = rb_ref_maxf(rb_ref_dot(v, h), 0.0f);
+    /* at most 1 as well: with l close to v, rounding can put it over (see brdf.glsl) */
+    float vdh = rb_ref_minf(rb_ref_maxf(rb_ref_dot(v, h), 0.0f), 1.0f);
     float a = rb_ref_maxf(roughness * roughness, 1e-4f);
     float a2 = a * a;
     t->ndl = ndl;

@@ -688,6 +688,13 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame,
         }
         o[RB_OUT_BEAUTY + 3] = 1.0f;
     }
+    /* Every float of the result, as the output pass counts them on the GPU. */
+    uint32_t nonfinite = 0;
+    for (size_t i = 0; i < px * RB_OUT_FLOATS; i++)
+        nonfinite += !isfinite(ref->pixels[i]);
+    if (nonfinite)
+        rb_log(RB_LOG_WARN, "frame %d: %u non-finite values (NaN or Inf) in the output", frame,
+               nonfinite);
 
     memset(out, 0, sizeof(*out));
     out->frame = frame;
@@ -700,5 +707,6 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame,
     out->render_s = now_s() - trace_start;
     out->world_to_camera = ref->cam.world_to_camera;
     out->world_to_ndc = ref->world_to_ndc;
+    out->nonfinite_count = nonfinite;
     return RB_OK;
 }

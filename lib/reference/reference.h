@@ -37,6 +37,7 @@ struct rb_reference_result {
     uint64_t ray_count; /* rays traced (camera, bounce and shadow rays) */
     double render_s;    /* wall time of the tracing */
     struct rb_mat4 world_to_camera, world_to_ndc; /* as the GPU integrators write them */
+    uint32_t nonfinite_count; /* NaN or infinite floats in pixels (all layers); 0 when clean */
 };
 
 /* Builds the reference for the job and scene (Embree device, light tables). Fails with
@@ -46,7 +47,8 @@ enum rb_status rb_reference_create(const struct rb_reference_desc *desc, struct 
 
 /* Renders one frame (time = frame / rate): evaluates the animation, deforms the geometry on the
  * CPU (skins, morphs, node transforms: the same math as the animate pass), rebuilds the BVH,
- * traces. Thread-safe only against itself: one render at a time per object. */
+ * traces. NaN and infinite values are counted and logged as a warning, as the GPU integrators
+ * do. Thread-safe only against itself: one render at a time per object. */
 enum rb_status rb_reference_render(struct rb_reference *ref, int frame,
                                    struct rb_reference_result *out, struct rb_err *err);
 

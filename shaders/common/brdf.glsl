@@ -13,9 +13,15 @@ vec3 rb_brdf(vec3 n, vec3 v, vec3 l, vec3 c_diff, vec3 f0, float f90, float roug
     float ndv = max(dot(n, v), 1e-4);
     if (ndl <= 0.0)
         return vec3(0.0);
-    vec3 h = normalize(l + v);
+    // l == -v: the half vector does not exist (normalize would give NaN), and there is no light.
+    vec3 lv = l + v;
+    if (!(dot(lv, lv) > 0.0))
+        return vec3(0.0);
+    vec3 h = normalize(lv);
     float ndh = max(dot(n, h), 0.0);
-    float vdh = max(dot(v, h), 0.0);
+    // Clamped above too: with l close to v, rounding puts dot(v, h) a few ulps over 1, and
+    // pow() of the negative 1 - vdh is NaN (a light on the line from the camera to the point).
+    float vdh = clamp(dot(v, h), 0.0, 1.0);
     float a = max(roughness * roughness, 1e-4);
     float a2 = a * a;
     vec3 F = f0 + (vec3(f90) - f0) * pow(1.0 - vdh, 5.0);

@@ -15,6 +15,8 @@ for scene in "$S"/*/*.glb "$S"/*/*.gltf; do
     rb render "$scene" --frames 0 --size 160x120 --out "$T/$name" -q --validate
     expect_exit 0 "$name renders one frame"
     check "$name wrote its EXR" test -s "$T/$name/frame.0000.exr"
+    check "$name: no NaN or Inf in the output (timing sidecar)" \
+        grep -Eq '"nonfinite": 0([^0-9]|$)' "$T/$name/frame.0000.timing.json"
     if grep -q 'validation' "$T/stderr"; then
         not_ok "$name: no validation messages" "$(head -c 1500 "$T/stderr")"
     else

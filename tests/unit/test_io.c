@@ -627,6 +627,7 @@ static void test_timing_json(void **state)
         .integrator = "bdpt",
         .width_px = 640,
         .height_px = 360,
+        .nonfinite_count = 6,
     };
     struct rb_err err = RB_ERR_INIT;
     const char *path = tpath("shot.0012.timing.json");
@@ -646,7 +647,8 @@ static void test_timing_json(void **state)
                            "  \"driver\": \"Mesa 22.3.6\",\n"
                            "  \"integrator\": \"bdpt\",\n"
                            "  \"width\": 640,\n"
-                           "  \"height\": 360\n"
+                           "  \"height\": 360,\n"
+                           "  \"nonfinite\": 6\n"
                            "}\n");
     free(s);
     assert_int_equal(count_entries(tmpdir, ".tmp."), 0);
@@ -685,7 +687,8 @@ static void test_timing_escapes(void **state)
                            "  \"driver\": null,\n"
                            "  \"integrator\": \"direct\",\n"
                            "  \"width\": 0,\n"
-                           "  \"height\": 0\n"
+                           "  \"height\": 0,\n"
+                           "  \"nonfinite\": 0\n"
                            "}\n");
     free(s);
 
