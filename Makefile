@@ -137,6 +137,38 @@ $(BUILD)/tests/fuzz/%: tests/fuzz/%.c tests/fuzz/replay.c $(BUILD)/libraybundle.
 	$(Q)$(CC) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(ALL_LDFLAGS) -o $@ $< tests/fuzz/replay.c \
 		$(BUILD)/libraybundle.a $(PKG_LIBS) -lstdc++
 
+# The same replays under ASan and UBSan (gcc or clang), also in make check: any report aborts the
+# replay and fails t0090. Only what the targets call (core, job, scene) is compiled again, into
+# $(BUILD)/asan at -O1 (fast to compile, still quick to run), so the main build is untouched and
+# the extra time stays small.
+FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -O1
+FUZZ_SAN_SRC := $(filter lib/core/% lib/job/% lib/scene/%,$(LIB_C) $(LIB_CXX))
+FUZZ_SAN_OBJ := $(patsubst %,$(BUILD)/asan/%.o,$(basename $(FUZZ_SAN_SRC)))
+FUZZ_SAN_BIN := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/asan/tests/fuzz/%)
+FUZZ_SAN_LIBS = $(shell $(PKG_CONFIG) --libs yaml-0.1 tinygltf 2>/dev/null) -lm
+FUZZ_SAN_DEPS := $(FUZZ_SAN_OBJ:.o=.d) $(FUZZ_SAN_BIN:=.d) $(BUILD)/asan/tests/fuzz/replay.d
+
+$(BUILD)/asan/.flags: FORCE
+	$(Q)mkdir -p $(BUILD)/asan
+	$(Q)echo '$(CC) $(CXX) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(ALL_CXXFLAGS) $(FUZZ_SAN)' | \
+		cmp -s - $@ || \
+		echo '$(CC) $(CXX) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(ALL_CXXFLAGS) $(FUZZ_SAN)' > $@
+
+$(BUILD)/asan/%.o: %.c $(BUILD)/asan/.flags $(DEPS_STAMP)
+	@mkdir -p $(dir $@)
+	@echo "  CC      $@"
+	$(Q)$(CC) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(FUZZ_SAN) -c -o $@ $<
+
+$(BUILD)/asan/%.o: %.cpp $(BUILD)/asan/.flags $(DEPS_STAMP)
+	@mkdir -p $(dir $@)
+	@echo "  CXX     $@"
+	$(Q)$(CXX) $(ALL_CPPFLAGS) $(ALL_CXXFLAGS) $(FUZZ_SAN) -c -o $@ $<
+
+$(FUZZ_SAN_BIN): $(BUILD)/asan/tests/fuzz/%: $(BUILD)/asan/tests/fuzz/%.o \
+		$(BUILD)/asan/tests/fuzz/replay.o $(FUZZ_SAN_OBJ)
+	@echo "  FUZZ    $@"
+	$(Q)$(CXX) $(FUZZ_SAN) $(ALL_LDFLAGS) -o $@ $^ $(FUZZ_SAN_LIBS)
+
 fuzz:
 	$(Q)$(MAKE) --no-print-directory BUILD=$(BUILD)-fuzz CC=clang CXX=clang++ \
 		SANITIZE=1 CFLAGS="-O1 -g -fsanitize=fuzzer-no-link" \
@@ -152,7 +184,8 @@ fuzz:
 			$$corpus || exit 1; \
 	done
 
-test check: $(BUILD)/raybundle $(BUILD)/mkdemo $(UNIT_BIN) $(TOOL_BIN) $(FUZZ_REPLAY)
+test check: $(BUILD)/raybundle $(BUILD)/mkdemo $(UNIT_BIN) $(TOOL_BIN) $(FUZZ_REPLAY) \
+		$(FUZZ_SAN_BIN)
 	$(Q)BUILD=$(BUILD) tests/run.sh
 
 bench: $(BUILD)/raybundle
@@ -185,4 +218,4 @@ format:
 clean:
 	rm -rf $(BUILD)
 
--include $(DEPS)
+-include $(DEPS) $(FUZZ_SAN_DEPS)
