@@ -34,12 +34,17 @@ ifeq ($(SANITIZE),1)
 SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer
 endif
 
+# No fused multiply-adds the source did not ask for: GCC fuses a * b + c across statements by
+# default (-ffp-contract=fast) where the target has an FMA, clang within one expression (on), so
+# the same source would round differently by compiler, target and optimisation level.
+FPFLAGS := -ffp-contract=off
+
 DEPFLAGS = -MMD -MP
 # DATADIR is not compiled in: the binary finds its data relative to itself (../share/raybundle),
 # so `make install` with another PREFIX installs the same build without rebuilding it.
 ALL_CPPFLAGS = -Ilib -I$(BUILD)/shaders -Ishaders/common -D_POSIX_C_SOURCE=200809L $(CPPFLAGS)
-ALL_CFLAGS = -std=c11 $(WARN) $(DEPFLAGS) $(PKG_CFLAGS) $(SANFLAGS) $(CFLAGS)
-ALL_CXXFLAGS = -std=c++17 $(CXXWARN) $(DEPFLAGS) $(PKG_CFLAGS) $(SANFLAGS) $(CXXFLAGS)
+ALL_CFLAGS = -std=c11 $(WARN) $(FPFLAGS) $(DEPFLAGS) $(PKG_CFLAGS) $(SANFLAGS) $(CFLAGS)
+ALL_CXXFLAGS = -std=c++17 $(CXXWARN) $(FPFLAGS) $(DEPFLAGS) $(PKG_CFLAGS) $(SANFLAGS) $(CXXFLAGS)
 ALL_LDFLAGS = $(SANFLAGS) $(LDFLAGS)
 
 LIB_C := $(sort $(wildcard lib/*/*.c))
@@ -119,7 +124,7 @@ $(BUILD)/tests/tools/%: tests/tools/%.c $(BUILD)/libraybundle.a $(BUILD)/.flags
 $(BUILD)/mkdemo: tools/mkdemo.c $(BUILD)/.flags
 	@mkdir -p $(dir $@)
 	@echo "  CC      $@"
-	$(Q)$(CC) -std=c11 $(WARN) $(CFLAGS) -o $@ $< -lm
+	$(Q)$(CC) -std=c11 $(WARN) $(FPFLAGS) $(CFLAGS) -o $@ $< -lm
 
 # Fuzz targets: replayed over their committed corpus in `make check` (any compiler), and run
 # under libFuzzer by `make fuzz` (clang; FUZZ_SECONDS each).
@@ -133,13 +138,45 @@ $(BUILD)/tests/fuzz/%: tests/fuzz/%.c tests/fuzz/replay.c $(BUILD)/libraybundle.
 	$(Q)$(CC) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(ALL_LDFLAGS) -o $@ $< tests/fuzz/replay.c \
 		$(BUILD)/libraybundle.a $(PKG_LIBS) -lstdc++
 
+# The same replays under ASan and UBSan (gcc or clang), also in make check: any report aborts the
+# replay and fails t0090. Only what the targets call (core, job, scene) is compiled again, into
+# $(BUILD)/asan at -O1 (fast to compile, still quick to run), so the main build is untouched and
+# the extra time stays small.
+FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -O1
+FUZZ_SAN_SRC := $(filter lib/core/% lib/job/% lib/scene/%,$(LIB_C) $(LIB_CXX))
+FUZZ_SAN_OBJ := $(patsubst %,$(BUILD)/asan/%.o,$(basename $(FUZZ_SAN_SRC)))
+FUZZ_SAN_BIN := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/asan/tests/fuzz/%)
+FUZZ_SAN_LIBS = $(shell $(PKG_CONFIG) --libs yaml-0.1 tinygltf libxxhash 2>/dev/null) -lm
+FUZZ_SAN_DEPS := $(FUZZ_SAN_OBJ:.o=.d) $(FUZZ_SAN_BIN:=.d) $(BUILD)/asan/tests/fuzz/replay.d
+
+$(BUILD)/asan/.flags: FORCE
+	$(Q)mkdir -p $(BUILD)/asan
+	$(Q)echo '$(CC) $(CXX) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(ALL_CXXFLAGS) $(FUZZ_SAN)' | \
+		cmp -s - $@ || \
+		echo '$(CC) $(CXX) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(ALL_CXXFLAGS) $(FUZZ_SAN)' > $@
+
+$(BUILD)/asan/%.o: %.c $(BUILD)/asan/.flags $(DEPS_STAMP)
+	@mkdir -p $(dir $@)
+	@echo "  CC      $@"
+	$(Q)$(CC) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(FUZZ_SAN) -c -o $@ $<
+
+$(BUILD)/asan/%.o: %.cpp $(BUILD)/asan/.flags $(DEPS_STAMP)
+	@mkdir -p $(dir $@)
+	@echo "  CXX     $@"
+	$(Q)$(CXX) $(ALL_CPPFLAGS) $(ALL_CXXFLAGS) $(FUZZ_SAN) -c -o $@ $<
+
+$(FUZZ_SAN_BIN): $(BUILD)/asan/tests/fuzz/%: $(BUILD)/asan/tests/fuzz/%.o \
+		$(BUILD)/asan/tests/fuzz/replay.o $(FUZZ_SAN_OBJ)
+	@echo "  FUZZ    $@"
+	$(Q)$(CXX) $(FUZZ_SAN) $(ALL_LDFLAGS) -o $@ $^ $(FUZZ_SAN_LIBS)
+
 fuzz:
 	$(Q)$(MAKE) --no-print-directory BUILD=$(BUILD)-fuzz CC=clang CXX=clang++ \
 		SANITIZE=1 CFLAGS="-O1 -g -fsanitize=fuzzer-no-link" \
 		CXXFLAGS="-O1 -g -fsanitize=fuzzer-no-link" $(BUILD)-fuzz/libraybundle.a
 	$(Q)for f in $(FUZZ_SRC); do \
 		name=$$(basename $$f .c); corpus=tests/fuzz/corpus/$${name#fuzz_}; \
-		clang $(ALL_CPPFLAGS) -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -c \
+		clang $(ALL_CPPFLAGS) -std=c11 $(FPFLAGS) -g -O1 -fsanitize=fuzzer,address,undefined -c \
 			-o $(BUILD)-fuzz/$$name.o $$f && \
 		clang++ -fsanitize=fuzzer,address,undefined -o $(BUILD)-fuzz/$$name \
 			$(BUILD)-fuzz/$$name.o $(BUILD)-fuzz/libraybundle.a $(PKG_LIBS) && \
@@ -148,7 +185,8 @@ fuzz:
 			$$corpus || exit 1; \
 	done
 
-test check: $(BUILD)/raybundle $(BUILD)/mkdemo $(UNIT_BIN) $(TOOL_BIN) $(FUZZ_REPLAY)
+test check: $(BUILD)/raybundle $(BUILD)/mkdemo $(UNIT_BIN) $(TOOL_BIN) $(FUZZ_REPLAY) \
+		$(FUZZ_SAN_BIN)
 	$(Q)BUILD=$(BUILD) tests/run.sh
 
 bench: $(BUILD)/raybundle
@@ -181,4 +219,4 @@ format:
 clean:
 	rm -rf $(BUILD)
 
--include $(DEPS)
+-include $(DEPS) $(FUZZ_SAN_DEPS)

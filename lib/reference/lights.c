@@ -28,7 +28,7 @@ float rb_ref_spot_factor(const float spot_dir[3], const float to_surface[3], flo
 
 /* rb_equirect_uv of lights.glsl: u from atan(x, -z) (-Z is the map's centre), v from the polar
  * angle (v = 0 is +Y); rotation turns the map about +Y. */
-static void equirect_uv(const float d_in[3], float rotation, float *u, float *v)
+void rb_ref_equirect_uv(const float d_in[3], float rotation, float *u, float *v)
 {
     float c = cosf(-rotation), s = sinf(-rotation);
     float d[3] = {c * d_in[0] + s * d_in[2], d_in[1], -s * d_in[0] + c * d_in[2]};
@@ -86,7 +86,7 @@ void rb_ref_env_eval(const struct rb_ref_env *env, const float d[3], float out[3
         return;
     }
     float u, v;
-    equirect_uv(d, env->rotation_rad, &u, &v);
+    rb_ref_equirect_uv(d, env->rotation_rad, &u, &v);
     if (!(u == u) || !(v == v)) {
         out[0] = out[1] = out[2] = 0.0f;
         return;
@@ -227,7 +227,7 @@ float rb_ref_env_pdf(const struct rb_ref_env *env, const float n[3], const float
     if (!env->rgba)
         return rb_ref_maxf(rb_ref_dot(n, d), 0.0f) / RB_PI;
     float u, v;
-    equirect_uv(d, env->rotation_rad, &u, &v);
+    rb_ref_equirect_uv(d, env->rotation_rad, &u, &v);
     if (!(u == u) || !(v == v))
         return 0.0f;
     uint32_t w = env->width_px, h = env->height_px;

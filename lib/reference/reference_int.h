@@ -148,6 +148,10 @@ float rb_ref_light_falloff(float dist, float range);
 float rb_ref_spot_factor(const float spot_dir[3], const float to_surface[3], float cos_inner,
                          float cos_outer);
 
+/* rb_equirect_uv of lights.glsl: the map coordinates of direction d (unit) for a map turned by
+ * rotation_rad about +Y. */
+void rb_ref_equirect_uv(const float d[3], float rotation_rad, float *u, float *v);
+
 /* Builds the importance table of env (its map, colour and intensity already set). */
 enum rb_status rb_ref_env_init(struct rb_ref_env *env, struct rb_err *err);
 void rb_ref_env_release(struct rb_ref_env *env);
