@@ -580,7 +580,7 @@ static int run(struct options *o, int argc, char **argv)
     }
     if (o->preview)
         job->color.preview = true;
-    if ((st = rb_scene_load(job->scene_path, &scene, &err))) {
+    if ((st = rb_scene_load(job->scene_path, 0, &scene, &err))) {
         cmd_error("%s", err.msg);
         rc = exit_for(st, false);
         goto out;
