@@ -92,4 +92,17 @@ typed negative-material '"mesh": 0' '"primitives": [{"attributes": {"POSITION": 
     '/meshes/0/primitives/0/material: expected non-negative integer, found -1'
 typed name-object '"mesh": 0, "name": {"first": "Box"}' "$prim" \
     '/nodes/0/name: expected string, found object'
+
+# --lenient (render and reference) loads such a file as tinygltf reads it, with a warning.
+sloppy=$T/scale-string.gltf
+warning="raybundle: warning: scene '$sloppy': /nodes/0/scale: expected array of 3 numbers, found string"
+rb render "$sloppy" --lenient --size 16x16 --out "$T/out-lenient"
+expect_exit 0 "--lenient: render exits 0"
+stderr_has "$warning" "--lenient: render warns, naming the pointer"
+check "--lenient: render writes the frame" test -f "$T/out-lenient/frame.0000.exr"
+rb reference "$sloppy" --lenient --size 8x8 --spp 1 --out "$T/out-lenient-ref"
+expect_exit 0 "--lenient: reference exits 0"
+stderr_has "$warning" "--lenient: reference warns, naming the pointer"
+rb reference "$sloppy" --size 8x8 --spp 1 --out "$T/out-strict-ref" -q
+expect_exit 2 "without --lenient: reference exits 2"
 done_testing
