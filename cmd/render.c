@@ -51,6 +51,7 @@ struct options {
     const char *output, *out_dir, *integrator, *device, *threads;
     const char *spp, *time_limit; /* as given, for messages */
     bool resume, validate, preview, quiet;
+    bool is_lenient; /* --lenient: glTF type errors are warnings */
     int verbose;
     const char *command; /* "render" or "reference" */
     /* Text behind the options that are sugar for --set (--frames, --size, ...). */
@@ -99,6 +100,7 @@ static void usage(FILE *f, const char *command)
             "  --preview            also write NAME.####.png through OpenColorIO\n"
             "  --device NAME|INDEX  pick a Vulkan device (default: lavapipe)\n"
             "  --validate           enable the Khronos validation layer; any message fails\n"
+            "  --lenient            glTF properties of the wrong type are warnings, not errors\n"
             "  --spp N              reference: samples per pixel (integrator.reference.spp)\n"
             "  --time-limit S       reference: stop at the pass of samples that crosses S seconds\n"
             "  --threads N          reference: worker threads (default: all cores)\n"
@@ -168,6 +170,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         O_PREVIEW,
         O_DEVICE,
         O_VALIDATE,
+        O_LENIENT,
         O_SPP,
         O_TIME_LIMIT,
         O_THREADS
@@ -186,6 +189,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"spp", required_argument, NULL, O_SPP},
         {"time-limit", required_argument, NULL, O_TIME_LIMIT},
         {"threads", required_argument, NULL, O_THREADS},
+        {"lenient", no_argument, NULL, O_LENIENT},
         {"quiet", no_argument, NULL, 'q'},
         {"verbose", no_argument, NULL, 'v'},
         {"help", no_argument, NULL, 'h'},
@@ -233,6 +237,7 @@ static int parse_options(int argc, char **argv, struct options *o)
                 add_override(o, "integrator.reference.time_limit_s", optarg, o->time_limit_origin);
             break;
         case O_THREADS: o->threads = optarg; break;
+        case O_LENIENT: o->is_lenient = true; break;
         case 'q': o->quiet = true; break;
         case 'v': o->verbose++; break;
         case 'h': usage(stdout, o->command); return 1;
@@ -699,7 +704,8 @@ static int run(struct options *o, int argc, char **argv)
     }
     if (o->preview)
         job->color.preview = true;
-    if ((st = rb_scene_load(job->scene_path, &scene, &err))) {
+    if ((st = rb_scene_load(job->scene_path, o->is_lenient ? RB_SCENE_LOAD_LENIENT : 0, &scene,
+                            &err))) {
         cmd_error("%s", err.msg);
         rc = exit_for(st, false);
         goto out;

@@ -1,15 +1,23 @@
 // The only file that includes tiny_gltf.h (Debian's libtinygltf holds the implementation, so
-// TINYGLTF_IMPLEMENTATION is not defined here). It parses a file and mirrors the tinygltf::Model
-// into the plain structs of gltf_shim.h; scene.c validates and converts them. No policy here.
+// TINYGLTF_IMPLEMENTATION is not defined here) and nlohmann/json.hpp, its JSON parser. It checks
+// the JSON against a table of property types (gltf_types.c's, or any), parses the file, and
+// mirrors the tinygltf::Model into the plain structs of gltf_shim.h; scene.c validates and
+// converts them. No policy here: the caller's callback decides what a type issue means.
 
 #include "core/core.h"
 
+extern "C" {
+#include "scene/scene.h"
+}
+
 #include "scene/gltf_shim.h"
 
+#include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
 #include <cctype>
 #include <cerrno>
+#include <climits>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -20,10 +28,267 @@
 namespace
 {
 
+using nlohmann::json;
+
+// ---- the JSON type check ----------------------------------------------------------------------
+
+// tinygltf stores indices and enums in an int.
+constexpr uint64_t UINT_LIMIT = INT32_MAX;
+
+std::string expected(const rb_scene_json_rule &r)
+{
+    switch (r.type) {
+    case RB_SCENE_JSON_OBJECT: return "object";
+    case RB_SCENE_JSON_ARRAY: return "array";
+    case RB_SCENE_JSON_STRING: return "string";
+    case RB_SCENE_JSON_BOOLEAN: return "boolean";
+    case RB_SCENE_JSON_NUMBER: return "number";
+    case RB_SCENE_JSON_UINT:
+    case RB_SCENE_JSON_SIZE: return "non-negative integer";
+    case RB_SCENE_JSON_NUMBERS:
+        return r.count ? "array of " + std::to_string(r.count) + " numbers" : "array of numbers";
+    case RB_SCENE_JSON_UINTS: return "array of non-negative integers";
+    case RB_SCENE_JSON_STRINGS: return "array of strings";
+    case RB_SCENE_JSON_INVALID: break;
+    }
+    return "a valid rule type";
+}
+
+// What a value is, for "found ...": its type, or for a number its value.
+std::string describe(const json &v)
+{
+    switch (v.type()) {
+    case json::value_t::null: return "null";
+    case json::value_t::object: return "object";
+    case json::value_t::array: return "array";
+    case json::value_t::string: return "string";
+    case json::value_t::boolean: return "boolean";
+    case json::value_t::number_integer: return std::to_string(v.get<int64_t>());
+    case json::value_t::number_unsigned: return std::to_string(v.get<uint64_t>());
+    case json::value_t::number_float: {
+        char buf[40];
+        std::snprintf(buf, sizeof(buf), "%g", v.get<double>());
+        std::string s = buf;
+        if (s.find_first_of(".eEin") == std::string::npos)
+            s += ".0"; // 1.0 is not the integer 1
+        return s;
+    }
+    case json::value_t::binary:
+    case json::value_t::discarded: break;
+    }
+    return "no JSON value";
+}
+
+bool is_uint(const json &v, uint64_t limit)
+{
+    if (v.is_number_unsigned())
+        return v.get<uint64_t>() <= limit;
+    return v.is_number_integer() && v.get<int64_t>() >= 0 &&
+           static_cast<uint64_t>(v.get<int64_t>()) <= limit;
+}
+
+// A pointer token as RFC 6901 writes it; control characters become '?' so a message stays one
+// printable line.
+std::string escape(const std::string &token)
+{
+    std::string out;
+    for (char ch : token) {
+        if (ch == '~')
+            out += "~0";
+        else if (ch == '/')
+            out += "~1";
+        else if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f)
+            out += '?';
+        else
+            out += ch;
+    }
+    return out;
+}
+
+struct Walk {
+    const rb_scene_json_rule *rules;
+    size_t rule_count;
+    rb_scene_json_issue_fn on_issue;
+    void *user;
+    std::string stop; // "<pointer>: <problem>" of the issue that stopped the walk
+};
+
+// One issue; false when the walk stops there.
+bool issue(Walk &w, const std::string &pointer, const std::string &problem)
+{
+    if (w.on_issue && w.on_issue(w.user, pointer.c_str(), problem.c_str()))
+        return true;
+    w.stop = pointer + ": " + problem;
+    return false;
+}
+
+bool check_scalar(Walk &w, const std::string &pointer, const json &v, rb_scene_json_type type,
+                  const std::string &want)
+{
+    bool ok = false;
+    switch (type) {
+    case RB_SCENE_JSON_OBJECT: ok = v.is_object(); break;
+    case RB_SCENE_JSON_ARRAY: ok = v.is_array(); break;
+    case RB_SCENE_JSON_STRING: ok = v.is_string(); break;
+    case RB_SCENE_JSON_BOOLEAN: ok = v.is_boolean(); break;
+    case RB_SCENE_JSON_NUMBER: ok = v.is_number(); break;
+    case RB_SCENE_JSON_UINT:
+    case RB_SCENE_JSON_SIZE: {
+        uint64_t limit = type == RB_SCENE_JSON_UINT ? UINT_LIMIT : UINT64_MAX;
+        if (is_uint(v, UINT64_MAX) && !is_uint(v, limit))
+            return issue(w, pointer,
+                         "expected " + want + ", found " + describe(v) + " (more than " +
+                             std::to_string(limit) + ")");
+        ok = is_uint(v, limit);
+        break;
+    }
+    default: break;
+    }
+    return ok || issue(w, pointer, "expected " + want + ", found " + describe(v));
+}
+
+bool check_value(Walk &w, const rb_scene_json_rule &r, const std::string &pointer, const json &v)
+{
+    rb_scene_json_type elem = RB_SCENE_JSON_INVALID;
+    switch (r.type) {
+    case RB_SCENE_JSON_NUMBERS: elem = RB_SCENE_JSON_NUMBER; break;
+    case RB_SCENE_JSON_UINTS: elem = RB_SCENE_JSON_UINT; break;
+    case RB_SCENE_JSON_STRINGS: elem = RB_SCENE_JSON_STRING; break;
+    case RB_SCENE_JSON_INVALID: return issue(w, pointer, "the rule has no type");
+    default: return check_scalar(w, pointer, v, r.type, expected(r));
+    }
+    if (!v.is_array())
+        return issue(w, pointer, "expected " + expected(r) + ", found " + describe(v));
+    if (r.type == RB_SCENE_JSON_NUMBERS && r.count && v.size() != r.count)
+        return issue(w, pointer,
+                     "expected " + expected(r) + ", found array of " + std::to_string(v.size()));
+    rb_scene_json_rule er{};
+    er.type = elem;
+    for (size_t i = 0; i < v.size(); i++)
+        if (!check_scalar(w, pointer + "/" + std::to_string(i), v[i], elem, expected(er)))
+            return false;
+    return true;
+}
+
+// One rule, split into tokens; wild[k] says what a "*" token walks: 'a' the elements of an
+// array, 'o' the members of an object (from the rule for the pointer before it), 0 a name.
+struct Path {
+    const rb_scene_json_rule *rule;
+    std::vector<std::string> tokens;
+    std::vector<char> wild;
+};
+
+Path split(const Walk &w, const rb_scene_json_rule &r)
+{
+    Path p{&r, {}, {}};
+    std::string ptr = r.pointer ? r.pointer : "";
+    size_t pos = 0;
+    while (pos < ptr.size() && ptr[pos] == '/') {
+        size_t end = ptr.find('/', pos + 1);
+        if (end == std::string::npos)
+            end = ptr.size();
+        std::string raw = ptr.substr(pos + 1, end - pos - 1), tok;
+        for (size_t i = 0; i < raw.size(); i++) {
+            if (raw[i] == '~' && i + 1 < raw.size() && (raw[i + 1] == '0' || raw[i + 1] == '1'))
+                tok += raw[++i] == '0' ? '~' : '/';
+            else
+                tok += raw[i];
+        }
+        char kind = 0;
+        if (raw == "*") {
+            kind = 'a';
+            std::string prefix = ptr.substr(0, pos);
+            for (size_t i = 0; i < w.rule_count; i++)
+                if (w.rules[i].pointer && prefix == w.rules[i].pointer &&
+                    w.rules[i].type == RB_SCENE_JSON_OBJECT)
+                    kind = 'o';
+        }
+        p.tokens.push_back(tok);
+        p.wild.push_back(kind);
+        pos = end;
+    }
+    return p;
+}
+
+bool walk(Walk &w, const Path &p, size_t k, const json &v, std::string &pointer)
+{
+    if (k == p.tokens.size())
+        return check_value(w, *p.rule, pointer, v);
+    size_t len = pointer.size();
+    bool go = true;
+    if (p.wild[k] == 'a' && v.is_array()) {
+        for (size_t i = 0; go && i < v.size(); i++) {
+            pointer += "/" + std::to_string(i);
+            go = walk(w, p, k + 1, v[i], pointer);
+            pointer.resize(len);
+        }
+    } else if (p.wild[k] == 'o' && v.is_object()) {
+        for (auto it = v.begin(); go && it != v.end(); ++it) {
+            pointer += "/" + escape(it.key());
+            go = walk(w, p, k + 1, it.value(), pointer);
+            pointer.resize(len);
+        }
+    } else if (!p.wild[k] && v.is_object()) {
+        // A parent of another type is its own rule's issue: nothing to look into here.
+        auto it = v.find(p.tokens[k]);
+        pointer += "/" + escape(p.tokens[k]);
+        if (it != v.end())
+            go = walk(w, p, k + 1, *it, pointer);
+        else if (k + 1 == p.tokens.size() && p.rule->is_required)
+            go = issue(w, pointer, "expected " + expected(*p.rule) + ", found nothing");
+        pointer.resize(len);
+    }
+    return go;
+}
+
+// Walks every rule over doc, an object; false when on_issue stopped it (w.stop says where).
+bool check_doc(Walk &w, const json &doc)
+{
+    for (size_t i = 0; i < w.rule_count; i++) {
+        Path p = split(w, w.rules[i]);
+        std::string pointer;
+        if (!walk(w, p, 0, doc, pointer))
+            return false;
+    }
+    return true;
+}
+
+uint32_t le32(const unsigned char *p)
+{
+    return static_cast<uint32_t>(p[0]) | static_cast<uint32_t>(p[1]) << 8 |
+           static_cast<uint32_t>(p[2]) << 16 | static_cast<uint32_t>(p[3]) << 24;
+}
+
+// The JSON text of a file: all of a .gltf, the first chunk of a .glb (glTF 4.4). False when a
+// .glb's header is too broken to find it; tinygltf then says why.
+bool json_span(const std::vector<unsigned char> &data, bool binary, const char **text, size_t *size)
+{
+    if (!binary) {
+        *text = reinterpret_cast<const char *>(data.data());
+        *size = data.size();
+        return true;
+    }
+    if (data.size() < 20 || std::memcmp(data.data(), "glTF", 4) != 0 ||
+        le32(&data[16]) != 0x4E4F534Au /* "JSON" */ || le32(&data[12]) > data.size() - 20)
+        return false;
+    *text = reinterpret_cast<const char *>(&data[20]);
+    *size = le32(&data[12]);
+    return true;
+}
+
+// ---- tinygltf's complaints ----------------------------------------------------------------
+
+// Lines of tinygltf 2.7's error text about files that glTF 2.0 allows: a skin without
+// inverseBindMatrices (5.28.1: identity matrices) is not worth a word, and a channel whose target
+// node is left to an extension (5.7.1) is dropped, which we would do anyway: a warning.
+const char *const quiet_errors[] = {"'inverseBindMatrices' property is missing in Skin."};
+const char *const warning_errors[] = {"'node' property is missing.",
+                                      "`node` field is missing in animation.channels.target"};
+
 struct Doc {
     rb_gltf_doc pub{}; // pub.impl points back here
     tinygltf::Model model;
-    std::string warnings;
+    std::string errors, warnings;
     std::vector<rb_gltf_accessor> accessors;
     std::vector<rb_gltf_buffer_view> views;
     std::vector<rb_gltf_buffer> buffers;
@@ -66,6 +331,32 @@ std::string join_lines(const std::string &s, const char *sep)
         start = end + 1;
     }
     return out;
+}
+
+// Sorts tinygltf's error text from a load that succeeded into errors and warnings (each joined
+// with newlines), leaving out the lines quiet_errors names.
+void sort_errors(const std::string &text, std::string *errors, std::string *warnings)
+{
+    std::string lines = join_lines(text, "\n");
+    size_t start = 0;
+    while (start < lines.size()) {
+        size_t end = lines.find('\n', start);
+        if (end == std::string::npos)
+            end = lines.size();
+        std::string line = lines.substr(start, end - start);
+        start = end + 1;
+        bool quiet = false, warn = false;
+        for (const char *q : quiet_errors)
+            quiet = quiet || line == q;
+        for (const char *q : warning_errors)
+            warn = warn || line == q;
+        std::string *to = warn ? warnings : errors;
+        if (quiet)
+            continue;
+        if (!to->empty())
+            *to += '\n';
+        *to += line;
+    }
 }
 
 const tinygltf::Value *find_ext(const tinygltf::ExtensionMap &ext, const char *name)
@@ -310,6 +601,7 @@ void mirror(Doc &d)
         d.ext_used.push_back(e.c_str());
 
     rb_gltf_doc &p = d.pub;
+    p.errors = d.errors.c_str();
     p.warnings = d.warnings.c_str();
     p.accessors = d.accessors.data();
     p.accessor_count = d.accessors.size();
@@ -355,37 +647,113 @@ bool ends_with(const std::string &s, const char *suffix)
     return true;
 }
 
+// Reads all of path into data.
+enum rb_status read_file(const char *path, std::vector<unsigned char> &data, struct rb_err *err)
+{
+    std::FILE *f = std::fopen(path, "rb");
+    if (!f)
+        return rb_errf(err, RB_E_IO, "cannot open '%s': %s", path, std::strerror(errno));
+    unsigned char buf[65536];
+    size_t got;
+    while ((got = std::fread(buf, 1, sizeof(buf), f)) > 0)
+        data.insert(data.end(), buf, buf + got);
+    bool failed = std::ferror(f) != 0;
+    int saved = errno;
+    std::fclose(f);
+    if (failed)
+        return rb_errf(err, RB_E_IO, "cannot read '%s': %s", path, std::strerror(saved));
+    return RB_OK;
+}
+
+// The directory tinygltf resolves external buffers and images against, as its *FromFile do.
+std::string base_dir(const std::string &path)
+{
+    size_t slash = path.find_last_of("/\\");
+    return slash == std::string::npos ? std::string() : path.substr(0, slash);
+}
+
 } // namespace
 
 // int32_t and int must agree for the reinterpret_casts of tinygltf's index vectors above.
 static_assert(sizeof(int) == sizeof(int32_t), "int is not 32 bits");
 
-extern "C" enum rb_status rb_gltf_shim_load(const char *path, struct rb_gltf_doc **out,
-                                            struct rb_err *err) noexcept
+extern "C" enum rb_status rb_gltf_shim_check(const char *text, size_t size,
+                                             const struct rb_gltf_check *check,
+                                             struct rb_err *err) noexcept
 {
     try {
+        json doc;
+        try {
+            doc = json::parse(text, text + size);
+        } catch (const json::parse_error &e) {
+            std::string why = e.what();
+            size_t cut = why.find("] "); // drop "[json.exception.parse_error.101] "
+            return rb_errf(err, RB_E_PARSE, "invalid JSON: %s",
+                           cut == std::string::npos ? why.c_str() : why.c_str() + cut + 2);
+        }
+        if (!doc.is_object())
+            return rb_errf(err, RB_E_PARSE,
+                           "not a glTF document: the top level is %s, not an object",
+                           describe(doc).c_str());
+        Walk w{check->rules, check->rule_count, check->on_issue, check->user, {}};
+        if (!check_doc(w, doc))
+            return rb_errf(err, RB_E_PARSE, "%s", w.stop.c_str());
+        return RB_OK;
+    } catch (const std::bad_alloc &) {
+        return rb_errf(err, RB_E_NOMEM, "out of memory checking glTF JSON");
+    } catch (const std::exception &e) {
+        return rb_errf(err, RB_E_EXTERNAL, "checking glTF JSON: %s", e.what());
+    } catch (...) {
+        return rb_errf(err, RB_E_EXTERNAL, "checking glTF JSON: unknown exception");
+    }
+}
+
+extern "C" enum rb_status rb_gltf_shim_load(const char *path, const struct rb_gltf_check *check,
+                                            struct rb_gltf_doc **out, struct rb_err *err) noexcept
+{
+    try {
+        std::vector<unsigned char> data;
+        enum rb_status st = read_file(path, data, err);
+        if (st)
+            return st;
         // Sniff the magic: a .gltf may hold binary glTF and vice versa.
-        char magic[4] = {0};
-        std::FILE *f = std::fopen(path, "rb");
-        if (!f)
-            return rb_errf(err, RB_E_IO, "cannot open '%s': %s", path, std::strerror(errno));
-        size_t got = std::fread(magic, 1, sizeof(magic), f);
-        std::fclose(f);
-        bool binary = (got == 4 && std::memcmp(magic, "glTF", 4) == 0) || ends_with(path, ".glb");
+        bool binary = (data.size() >= 4 && std::memcmp(data.data(), "glTF", 4) == 0) ||
+                      ends_with(path, ".glb");
+        if (data.size() > UINT_MAX) // tinygltf takes an unsigned int size
+            return rb_errf(err, RB_E_UNSUPPORTED, "cannot load '%s': larger than 4 GiB", path);
+
+        // The types first: tinygltf would skip what does not match. JSON that does not parse,
+        // or is no object, is left to tinygltf's own message.
+        const char *text = nullptr;
+        size_t text_size = 0;
+        if (check && json_span(data, binary, &text, &text_size)) {
+            json doc = json::parse(text, text + text_size, nullptr, false);
+            if (!doc.is_discarded() && doc.is_object()) {
+                Walk w{check->rules, check->rule_count, check->on_issue, check->user, {}};
+                if (!check_doc(w, doc))
+                    return rb_errf(err, RB_E_PARSE, "%s", w.stop.c_str());
+            }
+        }
 
         std::unique_ptr<Doc> d(new Doc());
         tinygltf::TinyGLTF loader;
-        std::string terr, twarn;
-        bool ok = binary ? loader.LoadBinaryFromFile(&d->model, &terr, &twarn, path)
-                         : loader.LoadASCIIFromFile(&d->model, &terr, &twarn, path);
+        std::string terr, twarn, base = base_dir(path);
+        static const unsigned char empty[1] = {0};
+        const unsigned char *bytes = data.empty() ? empty : data.data();
+        unsigned size = static_cast<unsigned>(data.size());
+        bool ok =
+            binary ? loader.LoadBinaryFromMemory(&d->model, &terr, &twarn, bytes, size, base)
+                   : loader.LoadASCIIFromString(&d->model, &terr, &twarn,
+                                                reinterpret_cast<const char *>(bytes), size, base);
         if (!ok) {
             std::string msg = join_lines(terr, "; ");
             return rb_errf(err, RB_E_PARSE, "cannot load '%s': %s", path,
                            msg.empty() ? "unknown tinygltf error" : msg.c_str());
         }
-        // tinygltf may also report errors on success (e.g. a misaligned GLB chunk): pass them
-        // on as warnings; scene.c decides what matters.
-        d->warnings = join_lines(twarn + "\n" + terr, "\n");
+        // tinygltf also reports errors on success (a dropped primitive, a misaligned GLB
+        // chunk): they go to the caller as errors, apart from the few about valid files.
+        d->warnings = join_lines(twarn, "\n");
+        sort_errors(terr, &d->errors, &d->warnings);
         mirror(*d);
         d->pub.impl = d.get();
         *out = &d.release()->pub;

@@ -1,11 +1,12 @@
-/* The tinygltf shim: parses a .gltf/.glb (buffers and images included) and exposes the document
- * as plain C arrays that mirror the glTF JSON. No defaults beyond tinygltf's and no validation:
- * indices are passed through as read (-1 == absent) and scene.c checks every one of them. */
+/* The tinygltf shim: checks the JSON types of a .gltf/.glb against a table, parses it (buffers
+ * and images included) and exposes the document as plain C arrays that mirror the glTF JSON. No
+ * defaults beyond tinygltf's and no validation of values: indices are passed through as read
+ * (-1 == absent) and scene.c checks every one of them. */
 #ifndef RB_SCENE_GLTF_SHIM_H
 #define RB_SCENE_GLTF_SHIM_H
 
 #ifndef __cplusplus
-#include "core/core.h" /* gltf_shim.cpp includes it itself: core.h is C-only */
+#include "scene/scene.h" /* gltf_shim.cpp includes it itself, inside extern "C" */
 #endif
 
 #ifdef __cplusplus
@@ -167,7 +168,9 @@ struct rb_gltf_scene {
 
 /* The document. Every pointer stays valid until rb_gltf_shim_free. */
 struct rb_gltf_doc {
-    const char *warnings; /* tinygltf's warnings, one per line; "" when none */
+    const char *errors;   /* what tinygltf found wrong in a file it still loaded (a primitive it
+                           * dropped, a misaligned chunk), one per line; "" when none */
+    const char *warnings; /* tinygltf's warnings (an image it could not load), one per line */
     const struct rb_gltf_accessor *accessors;
     size_t accessor_count;
     const struct rb_gltf_buffer_view *buffer_views;
@@ -202,12 +205,27 @@ struct rb_gltf_doc {
     void *impl; /* the shim's own object */
 };
 
+/* The JSON type check rb_gltf_shim_load runs before tinygltf parses: see rb_scene_json_check. */
+struct rb_gltf_check {
+    const struct rb_scene_json_rule *rules;
+    size_t rule_count;
+    rb_scene_json_issue_fn on_issue; /* NULL: the first issue fails the load */
+    void *user;
+};
+
+/* rb_scene_json_check: the JSON text checked against check's rules, on_issue called per issue. */
+enum rb_status rb_gltf_shim_check(const char *text, size_t size, const struct rb_gltf_check *check,
+                                  struct rb_err *err) RB_GLTF_NOEXCEPT;
+
 /* Parses path: a binary glTF when the file starts with "glTF" (or is named *.glb), else JSON.
- * Images are decoded to 8 or 16 bits per channel, RGBA (tinygltf's default). On failure returns
- * RB_E_PARSE with "cannot load 'path': <tinygltf's error>" (RB_E_NOMEM, RB_E_EXTERNAL for
- * exceptions); *out only on success, freed with rb_gltf_shim_free. */
-enum rb_status rb_gltf_shim_load(const char *path, struct rb_gltf_doc **out,
-                                 struct rb_err *err) RB_GLTF_NOEXCEPT;
+ * With check (may be NULL), the JSON (a .glb's JSON chunk) is checked first; when on_issue stops
+ * the check, returns RB_E_PARSE with "<pointer>: <problem>" before tinygltf sees the file. JSON
+ * that does not parse is left to tinygltf. Images are decoded to 8 or 16 bits per channel, RGBA
+ * (tinygltf's default). On failure returns RB_E_IO with "cannot open 'path': ...", RB_E_PARSE
+ * with "cannot load 'path': <tinygltf's error>" (RB_E_NOMEM, RB_E_EXTERNAL for exceptions);
+ * *out only on success, freed with rb_gltf_shim_free. */
+enum rb_status rb_gltf_shim_load(const char *path, const struct rb_gltf_check *check,
+                                 struct rb_gltf_doc **out, struct rb_err *err) RB_GLTF_NOEXCEPT;
 /* Frees everything rb_gltf_shim_load made; accepts NULL. */
 void rb_gltf_shim_free(struct rb_gltf_doc *doc) RB_GLTF_NOEXCEPT;
 

@@ -1523,7 +1523,7 @@ static void log_warnings(const char *path, const char *text)
         const char *end = strchr(text, '\n');
         int len = end ? (int)(end - text) : (int)strlen(text);
         if (len > 0)
-            rb_log(RB_LOG_WARN, "'%s': %.*s", path, len, text);
+            rb_log(RB_LOG_WARN, "scene '%s': %.*s", path, len, text);
         text += len + (end ? 1 : 0);
     }
 }
@@ -1556,13 +1556,40 @@ static enum rb_status content_hash(const char *path, const struct rb_gltf_doc *d
     return RB_OK;
 }
 
-enum rb_status rb_scene_load(const char *path, struct rb_scene **out, struct rb_err *err)
+struct load_policy {
+    const char *path;
+    bool is_lenient;
+};
+
+/* A JSON type issue: strict, it stops the load (the shim turns it into the error); lenient, it
+ * is a warning and tinygltf reads the file as it can. */
+static bool on_json_issue(void *user, const char *pointer, const char *problem)
+{
+    const struct load_policy *p = user;
+    if (p->is_lenient)
+        rb_log(RB_LOG_WARN, "scene '%s': %s: %s", p->path, pointer, problem);
+    return p->is_lenient;
+}
+
+enum rb_status rb_scene_load(const char *path, unsigned flags, struct rb_scene **out,
+                             struct rb_err *err)
 {
     struct rb_gltf_doc *doc = NULL;
     struct conv c = {.err = err};
-    enum rb_status st = rb_gltf_shim_load(path, &doc, err);
+    struct load_policy policy = {path, (flags & RB_SCENE_LOAD_LENIENT) != 0};
+    struct rb_gltf_check check = {rb_scene_json_rules, rb_scene_json_rule_count, on_json_issue,
+                                  &policy};
+    enum rb_status st = rb_gltf_shim_load(path, &check, &doc, err);
     if (st)
-        return st;
+        goto out;
+    if (*doc->errors && !policy.is_lenient) {
+        /* tinygltf loaded it but found it broken: a primitive it dropped, a misaligned chunk */
+        const char *nl = strchr(doc->errors, '\n');
+        int len = nl ? (int)(nl - doc->errors) : (int)strlen(doc->errors);
+        st = rb_errf(err, RB_E_PARSE, "%.*s", len, doc->errors);
+        goto out;
+    }
+    log_warnings(path, doc->errors);
     log_warnings(path, doc->warnings);
     c.doc = doc;
     c.s = calloc(1, sizeof(struct rb_scene));
@@ -1599,7 +1626,7 @@ enum rb_status rb_scene_load(const char *path, struct rb_scene **out, struct rb_
     c.s = NULL;
 out:
     if (st && err && !strstr(err->msg, path))
-        rb_err_prefix(err, "'%s'", path);
+        rb_err_prefix(err, "scene '%s'", path);
     rb_scene_destroy(c.s);
     free(c.image_texture);
     free(c.mesh_targets);

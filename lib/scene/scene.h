@@ -162,12 +162,69 @@ struct rb_scene {
     uint32_t animation_count;
 };
 
-/* Loads a .gltf or .glb. Unsupported features that change the picture (a non-triangle primitive,
- * a required extension we lack) are errors naming the element ("mesh 'Body' primitive 2: ...");
- * ones that do not are warnings through rb_log. Missing or corrupt files and images are errors.
- * Returns RB_E_IO, RB_E_PARSE or RB_E_UNSUPPORTED on failure; *out only on success. */
-enum rb_status rb_scene_load(const char *path, struct rb_scene **out, struct rb_err *err);
+/* Flags for rb_scene_load; 0 is the strict default. */
+enum rb_scene_load_flags {
+    RB_SCENE_LOAD_LENIENT = 1 << 0, /* JSON type errors and tinygltf's complaints are warnings */
+};
+
+/* Loads a .gltf or .glb. Before tinygltf parses, the JSON (a .glb's JSON chunk) is checked
+ * against rb_scene_json_rules: a property of the wrong type, or a required one that is missing,
+ * is an error naming its JSON pointer ("scene 'x.gltf': /meshes/0/primitives: expected array,
+ * found object"), as is anything tinygltf complains about while loading. flags holds
+ * RB_SCENE_LOAD_* bits; with RB_SCENE_LOAD_LENIENT those become warnings through rb_log and the
+ * file loads as tinygltf reads it (a property of the wrong type is skipped). Unsupported features
+ * that change the picture (a non-triangle primitive, a required extension we lack) are errors
+ * naming the element ("mesh 'Body' primitive 2: ..."); ones that do not are warnings through
+ * rb_log. Missing or corrupt files and images are errors. Returns RB_E_IO, RB_E_PARSE or
+ * RB_E_UNSUPPORTED on failure; *out only on success. */
+enum rb_status rb_scene_load(const char *path, unsigned flags, struct rb_scene **out,
+                             struct rb_err *err);
 void rb_scene_destroy(struct rb_scene *scene);
+
+/* ---- glTF JSON types ------------------------------------------------------------------------ */
+
+/* What a property must be. tinygltf 2.7 silently skips an optional property of the wrong type,
+ * so the loader checks these first. */
+enum rb_scene_json_type {
+    RB_SCENE_JSON_INVALID = 0,
+    RB_SCENE_JSON_OBJECT,
+    RB_SCENE_JSON_ARRAY,
+    RB_SCENE_JSON_STRING,
+    RB_SCENE_JSON_BOOLEAN,
+    RB_SCENE_JSON_NUMBER,
+    RB_SCENE_JSON_UINT,    /* integer 0 to 2^31 - 1: an index or enum (tinygltf keeps an int) */
+    RB_SCENE_JSON_SIZE,    /* integer >= 0: a byte offset, length or element count */
+    RB_SCENE_JSON_NUMBERS, /* array of numbers, exactly count of them unless count is 0 */
+    RB_SCENE_JSON_UINTS,   /* array of RB_SCENE_JSON_UINT */
+    RB_SCENE_JSON_STRINGS, /* array of strings */
+};
+
+/* One property: a JSON pointer (RFC 6901) where "*" stands for every element of an array or
+ * every member of an object (whichever the rule for the pointer before it says). A rule applies
+ * when its parent is there: "/a/b" is checked only where "/a" is an object. */
+struct rb_scene_json_rule {
+    const char *pointer; /* e.g. "/nodes/N/scale" with a "*" token for N */
+    enum rb_scene_json_type type;
+    uint32_t count;   /* RB_SCENE_JSON_NUMBERS: the exact length; 0 == any */
+    bool is_required; /* missing from a parent that is there: an issue too */
+};
+
+/* The properties raybundle reads (everything gltf_shim.cpp takes from tinygltf), parents before
+ * their children: the one table the loader checks and the tests walk. */
+extern const struct rb_scene_json_rule rb_scene_json_rules[];
+extern const size_t rb_scene_json_rule_count;
+
+/* Called for each property that breaks a rule: pointer is concrete ("/nodes/3/scale"), problem
+ * reads "expected array of 3 numbers, found string". Return true to go on, false to stop. */
+typedef bool (*rb_scene_json_issue_fn)(void *user, const char *pointer, const char *problem);
+
+/* Checks the glTF JSON text (size bytes, no terminator needed) against rules, in table order and
+ * then document order, calling on_issue for each issue (NULL: stop at the first). Returns RB_OK
+ * when the walk finished, RB_E_PARSE with "<pointer>: <problem>" when on_issue stopped it and
+ * with "invalid JSON: <cause>" when the text does not parse. Thread-safe. */
+enum rb_status rb_scene_json_check(const char *text, size_t size,
+                                   const struct rb_scene_json_rule *rules, size_t rule_count,
+                                   rb_scene_json_issue_fn on_issue, void *user, struct rb_err *err);
 
 /* Index of the node, camera node, or animation with that name, or RB_SCENE_NONE. */
 uint32_t rb_scene_find_node(const struct rb_scene *scene, const char *name);

@@ -1,6 +1,7 @@
-/* Fuzz target for the glTF loader: any bytes, as a .glb and as a .gltf, must load or fail with
- * a message, never crash. The loader reads files (external buffers and images are resolved
- * beside them), so each input goes through a temporary file. Built like fuzz_job.c. */
+/* Fuzz target for the glTF loader: any bytes, as a .glb and as a .gltf, strict and lenient, must
+ * load or fail with a message, never crash. The loader reads files (external buffers and images
+ * are resolved beside them), so each input goes through a temporary file. Built like
+ * fuzz_job.c. */
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -24,9 +25,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             return 0;
         fwrite(data, 1, size, f);
         fclose(f);
-        struct rb_scene *scene = NULL;
-        struct rb_err err = RB_ERR_INIT;
-        if (rb_scene_load(path, &scene, &err) == RB_OK) {
+        for (unsigned flags = 0; flags <= RB_SCENE_LOAD_LENIENT; flags += RB_SCENE_LOAD_LENIENT) {
+            struct rb_scene *scene = NULL;
+            struct rb_err err = RB_ERR_INIT;
+            if (rb_scene_load(path, flags, &scene, &err) != RB_OK)
+                continue;
             struct rb_scene_pose *pose = NULL;
             if (rb_scene_pose_create(scene, &pose, &err) == RB_OK) {
                 uint32_t clips[4], n = 0;

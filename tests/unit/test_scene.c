@@ -52,7 +52,7 @@ static struct rb_scene *load(const char *path)
 {
     struct rb_scene *s = NULL;
     struct rb_err err = RB_ERR_INIT;
-    enum rb_status st = rb_scene_load(path, &s, &err);
+    enum rb_status st = rb_scene_load(path, 0, &s, &err);
     if (st)
         fail_msg("loading '%s' failed: %s", path, err.msg);
     return s;
@@ -145,7 +145,7 @@ static enum rb_status load_tiny(const char *name, const char *top, const char *n
     snprintf(json, sizeof(json), tiny_gltf, top, node, prim, count);
     write_file(name, json, strlen(json), path, cap);
     struct rb_scene *s = NULL;
-    enum rb_status st = rb_scene_load(path, &s, err);
+    enum rb_status st = rb_scene_load(path, 0, &s, err);
     rb_scene_destroy(s);
     return st;
 }
@@ -657,7 +657,7 @@ static void test_missing_file(void **state)
     (void)state;
     struct rb_scene *s = NULL;
     struct rb_err err = RB_ERR_INIT;
-    assert_int_equal(rb_scene_load("tests/unit/scenes/no-such-scene.glb", &s, &err), RB_E_IO);
+    assert_int_equal(rb_scene_load("tests/unit/scenes/no-such-scene.glb", 0, &s, &err), RB_E_IO);
     assert_null(s);
     assert_non_null(strstr(err.msg, "no-such-scene.glb"));
 }
@@ -672,7 +672,7 @@ static void test_corrupt_glb(void **state)
     write_file("junk.glb", junk, sizeof(junk), path, sizeof(path));
     struct rb_scene *s = NULL;
     struct rb_err err = RB_ERR_INIT;
-    assert_int_equal(rb_scene_load(path, &s, &err), RB_E_PARSE);
+    assert_int_equal(rb_scene_load(path, 0, &s, &err), RB_E_PARSE);
     assert_null(s);
     assert_non_null(strstr(err.msg, path));
     assert_non_null(strstr(err.msg, "cannot load"));
@@ -683,11 +683,11 @@ static void test_corrupt_glb(void **state)
     memcpy(glb + 4, words, sizeof(words));
     memcpy(glb + 20, "{\"asset\":{\"version\":\"2.0\"},\"nodes\":[{", 38);
     write_file("cut.glb", glb, sizeof(glb), path, sizeof(path));
-    assert_int_equal(rb_scene_load(path, &s, &err), RB_E_PARSE);
+    assert_int_equal(rb_scene_load(path, 0, &s, &err), RB_E_PARSE);
     assert_non_null(strstr(err.msg, path));
 
     write_file("junk.gltf", "{ \"asset\": ", 11, path, sizeof(path));
-    assert_int_equal(rb_scene_load(path, &s, &err), RB_E_PARSE);
+    assert_int_equal(rb_scene_load(path, 0, &s, &err), RB_E_PARSE);
     assert_non_null(strstr(err.msg, path));
 }
 
@@ -774,8 +774,348 @@ static void test_bad_references(void **state)
         "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA=\"}]}";
     write_file("index.gltf", json, strlen(json), path, sizeof(path));
     struct rb_scene *s = NULL;
-    assert_int_equal(rb_scene_load(path, &s, &err), RB_E_PARSE);
+    assert_int_equal(rb_scene_load(path, 0, &s, &err), RB_E_PARSE);
     assert_non_null(strstr(err.msg, "mesh 'Body' primitive 0: index 2 out of range"));
+}
+
+/* ---- glTF JSON types ------------------------------------------------------------------------ */
+
+/* Every issue rb_scene_json_check reports, one "pointer: problem" line each. */
+static char issues[16384];
+
+static bool collect(void *user, const char *pointer, const char *problem)
+{
+    (void)user;
+    size_t n = strlen(issues);
+    snprintf(issues + n, sizeof(issues) - n, "%s: %s\n", pointer, problem);
+    return true;
+}
+
+static enum rb_status check_json(const char *json, const struct rb_scene_json_rule *rules,
+                                 size_t rule_count, struct rb_err *err)
+{
+    issues[0] = '\0';
+    return rb_scene_json_check(json, strlen(json), rules, rule_count, collect, NULL, err);
+}
+
+/* The walker on a table of its own: wildcards over arrays and objects, required members, the
+ * types and their messages, table-then-document order, and stopping at the first issue. */
+static void test_json_walker(void **state)
+{
+    (void)state;
+    static const struct rb_scene_json_rule rules[] = {
+        {"/list", RB_SCENE_JSON_ARRAY, 0, true},
+        {"/list/*", RB_SCENE_JSON_OBJECT, 0, false},
+        {"/list/*/i", RB_SCENE_JSON_UINT, 0, false},
+        {"/list/*/v", RB_SCENE_JSON_NUMBERS, 3, false},
+        {"/list/*/map", RB_SCENE_JSON_OBJECT, 0, false},
+        {"/list/*/map/*", RB_SCENE_JSON_UINT, 0, false},
+        {"/list/*/need", RB_SCENE_JSON_STRING, 0, true},
+        {"/size", RB_SCENE_JSON_SIZE, 0, false},
+        {"/flag", RB_SCENE_JSON_BOOLEAN, 0, false},
+        {"/names", RB_SCENE_JSON_STRINGS, 0, false},
+        {"/ids", RB_SCENE_JSON_UINTS, 0, false},
+    };
+    static const struct {
+        const char *json, *issues;
+    } cases[] = {
+        {"{\"list\":[{\"i\":0,\"v\":[1,2.5,-3e2],\"map\":{\"A\":1},\"need\":\"x\"}],"
+         "\"size\":8589934592,\"flag\":true,\"names\":[\"a\"],\"ids\":[0,2147483647]}",
+         ""},
+        {"{}", "/list: expected array, found nothing\n"},
+        /* a parent of the wrong type is reported once, and nothing below it */
+        {"{\"list\":{\"a\":{\"i\":-1}}}", "/list: expected array, found object\n"},
+        {"{\"list\":[5]}", "/list/0: expected object, found 5\n"},
+        {"{\"list\":[{\"need\":\"x\",\"i\":-1},{\"need\":\"x\",\"i\":1.0},"
+         "{\"need\":\"x\",\"i\":2147483648},{\"need\":\"x\",\"i\":\"0\"}]}",
+         "/list/0/i: expected non-negative integer, found -1\n"
+         "/list/1/i: expected non-negative integer, found 1.0\n"
+         "/list/2/i: expected non-negative integer, found 2147483648 (more than 2147483647)\n"
+         "/list/3/i: expected non-negative integer, found string\n"},
+        {"{\"list\":[{\"need\":\"x\",\"v\":[1,2]},{\"need\":\"x\",\"v\":[1,\"2\",3]},"
+         "{\"need\":\"x\",\"v\":\"1,2,3\"}]}",
+         "/list/0/v: expected array of 3 numbers, found array of 2\n"
+         "/list/1/v/1: expected number, found string\n"
+         "/list/2/v: expected array of 3 numbers, found string\n"},
+        /* members in key order, escaped as RFC 6901 says; the table's order comes first */
+        {"{\"list\":[{\"map\":{\"e\":null,\"a/b\":\"1\",\"c~d\":2}},{\"map\":[]}]}",
+         "/list/1/map: expected object, found array\n"
+         "/list/0/map/a~1b: expected non-negative integer, found string\n"
+         "/list/0/map/e: expected non-negative integer, found null\n"
+         "/list/0/need: expected string, found nothing\n"
+         "/list/1/need: expected string, found nothing\n"},
+        {"{\"size\":-1,\"flag\":\"yes\",\"names\":[\"a\",1],\"ids\":[0,-4]}",
+         "/list: expected array, found nothing\n"
+         "/size: expected non-negative integer, found -1\n"
+         "/flag: expected boolean, found string\n"
+         "/names/1: expected string, found 1\n"
+         "/ids/1: expected non-negative integer, found -4\n"},
+    };
+    struct rb_err err = RB_ERR_INIT;
+    for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+        assert_int_equal(check_json(cases[i].json, rules, sizeof(rules) / sizeof(rules[0]), &err),
+                         RB_OK);
+        if (strcmp(issues, cases[i].issues))
+            fail_msg("case %zu: issues\n%s\nexpected\n%s", i, issues, cases[i].issues);
+    }
+
+    /* without a callback the first issue stops the walk and is the error */
+    const char *json = "{\"list\":[{\"i\":\"0\"}]}";
+    assert_int_equal(rb_scene_json_check(json, strlen(json), rules,
+                                         sizeof(rules) / sizeof(rules[0]), NULL, NULL, &err),
+                     RB_E_PARSE);
+    assert_string_equal(err.msg, "/list/0/i: expected non-negative integer, found string");
+    /* the text's size counts, not a terminator */
+    assert_int_equal(rb_scene_json_check("{}garbage", 2, rules, 1, collect, NULL, &err), RB_OK);
+
+    assert_int_equal(check_json("{\"list\":[", rules, 1, &err), RB_E_PARSE);
+    assert_non_null(strstr(err.msg, "invalid JSON: "));
+    assert_int_equal(check_json("[1]", rules, 1, &err), RB_E_PARSE);
+    assert_string_equal(err.msg, "not a glTF document: the top level is array, not an object");
+}
+
+/* The rule for exactly the first len characters of pointer, or NULL. */
+static const struct rb_scene_json_rule *rule_for(const char *pointer, size_t len)
+{
+    for (size_t i = 0; i < rb_scene_json_rule_count; i++)
+        if (strlen(rb_scene_json_rules[i].pointer) == len &&
+            !strncmp(rb_scene_json_rules[i].pointer, pointer, len))
+            return &rb_scene_json_rules[i];
+    return NULL;
+}
+
+/* The table itself: real types, pointers that start with '/', no rule twice, and every parent
+ * with a rule of its own earlier in the table (an object before a name, an array or object before
+ * a "*"), so the walker never looks into an unchecked value and parents are reported first. */
+static void test_json_rules_table(void **state)
+{
+    (void)state;
+    assert_true(rb_scene_json_rule_count > 100);
+    for (size_t i = 0; i < rb_scene_json_rule_count; i++) {
+        const struct rb_scene_json_rule *r = &rb_scene_json_rules[i];
+        if (r->type <= RB_SCENE_JSON_INVALID || r->type > RB_SCENE_JSON_STRINGS ||
+            r->pointer[0] != '/' || (r->count && r->type != RB_SCENE_JSON_NUMBERS))
+            fail_msg("rule %zu '%s' is malformed", i, r->pointer);
+        for (size_t k = 0; k < i; k++)
+            if (!strcmp(rb_scene_json_rules[k].pointer, r->pointer))
+                fail_msg("'%s' has two rules", r->pointer);
+        for (const char *slash = strchr(r->pointer + 1, '/'); slash;
+             slash = strchr(slash + 1, '/')) {
+            const struct rb_scene_json_rule *parent =
+                rule_for(r->pointer, (size_t)(slash - r->pointer));
+            bool wild = slash[1] == '*' && (slash[2] == '/' || !slash[2]);
+            if (!parent || parent > r ||
+                !(parent->type == RB_SCENE_JSON_OBJECT ||
+                  (wild && parent->type == RB_SCENE_JSON_ARRAY)))
+                fail_msg("'%s': its parent '%.*s' has no rule before it, or not an %s one",
+                         r->pointer, (int)(slash - r->pointer), r->pointer,
+                         wild ? "array or object" : "object");
+        }
+    }
+}
+
+/* JSON that holds the path of pointer with value at its end, each "*" as element 0 of an array
+ * or member "K" of an object (as the parent's rule says); value NULL leaves the last member out
+ * of its parent. Writes the concrete pointer into where. */
+static void instantiate(const char *pointer, const char *value, char *json, size_t cap, char *where,
+                        size_t where_cap)
+{
+    char closers[64] = "";
+    size_t n = 0, w = 0;
+    json[0] = where[0] = '\0';
+    for (const char *p = pointer; *p == '/';) {
+        const char *end = strchr(p + 1, '/');
+        size_t len = end ? (size_t)(end - p - 1) : strlen(p + 1);
+        bool last = !end;
+        if (len == 1 && p[1] == '*') {
+            const struct rb_scene_json_rule *parent = rule_for(pointer, (size_t)(p - pointer));
+            bool array = parent->type == RB_SCENE_JSON_ARRAY;
+            n += (size_t)snprintf(json + n, cap - n, array ? "[" : "{\"K\":");
+            w += (size_t)snprintf(where + w, where_cap - w, array ? "/0" : "/K");
+            closers[strlen(closers)] = array ? ']' : '}';
+        } else if (last && !value) {
+            n += (size_t)snprintf(json + n, cap - n, "{}");
+            w += (size_t)snprintf(where + w, where_cap - w, "/%.*s", (int)len, p + 1);
+        } else {
+            n += (size_t)snprintf(json + n, cap - n, "{\"%.*s\":", (int)len, p + 1);
+            w += (size_t)snprintf(where + w, where_cap - w, "/%.*s", (int)len, p + 1);
+            closers[strlen(closers)] = '}';
+        }
+        p += len + 1;
+    }
+    if (value)
+        n += (size_t)snprintf(json + n, cap - n, "%s", value);
+    for (size_t k = strlen(closers); k-- > 0;)
+        n += (size_t)snprintf(json + n, cap - n, "%c", closers[k]);
+}
+
+/* Whether issues has a line for exactly this pointer that ends in found. */
+static bool has_issue(const char *where, const char *found)
+{
+    char head[512];
+    snprintf(head, sizeof(head), "%s: expected ", where);
+    for (const char *line = issues; *line;) {
+        const char *nl = strchr(line, '\n');
+        size_t len = (size_t)(nl - line), flen = strlen(found);
+        if (!strncmp(line, head, strlen(head)) && len >= flen &&
+            !strncmp(line + len - flen, found, flen))
+            return true;
+        line = nl + 1;
+    }
+    return false;
+}
+
+/* Every rule of the real table, in a document of its own: a null there is reported at its
+ * pointer, a value of the right type is not, and a missing one only when the rule requires it. */
+static void test_json_rules_each(void **state)
+{
+    (void)state;
+    static const char *const good[] = {
+        [RB_SCENE_JSON_OBJECT] = "{}",       [RB_SCENE_JSON_ARRAY] = "[]",
+        [RB_SCENE_JSON_STRING] = "\"s\"",    [RB_SCENE_JSON_BOOLEAN] = "false",
+        [RB_SCENE_JSON_NUMBER] = "-0.5",     [RB_SCENE_JSON_UINT] = "3",
+        [RB_SCENE_JSON_SIZE] = "4294967296", [RB_SCENE_JSON_UINTS] = "[0,1]",
+        [RB_SCENE_JSON_STRINGS] = "[\"s\"]",
+    };
+    struct rb_err err = RB_ERR_INIT;
+    char json[2048], where[512];
+    for (size_t i = 0; i < rb_scene_json_rule_count; i++) {
+        const struct rb_scene_json_rule *r = &rb_scene_json_rules[i];
+        instantiate(r->pointer, "null", json, sizeof(json), where, sizeof(where));
+        assert_int_equal(check_json(json, rb_scene_json_rules, rb_scene_json_rule_count, &err),
+                         RB_OK);
+        if (!has_issue(where, ", found null"))
+            fail_msg("%s: null not reported in %s\n%s", r->pointer, json, issues);
+
+        char numbers[80] = "[0";
+        for (uint32_t k = 1; k < (r->count ? r->count : 2); k++)
+            strcat(numbers, ",0");
+        strcat(numbers, "]");
+        instantiate(r->pointer, r->type == RB_SCENE_JSON_NUMBERS ? numbers : good[r->type], json,
+                    sizeof(json), where, sizeof(where));
+        check_json(json, rb_scene_json_rules, rb_scene_json_rule_count, &err);
+        if (has_issue(where, ""))
+            fail_msg("%s: a good value is reported in %s\n%s", r->pointer, json, issues);
+
+        if (where[strlen(where) - 2] == '/' && strchr("0K", where[strlen(where) - 1]))
+            continue; /* the member of a wildcard cannot be missing */
+        instantiate(r->pointer, NULL, json, sizeof(json), where, sizeof(where));
+        check_json(json, rb_scene_json_rules, rb_scene_json_rule_count, &err);
+        if (has_issue(where, ", found nothing") != r->is_required)
+            fail_msg("%s: missing from %s is %sreported\n%s", r->pointer, json,
+                     r->is_required ? "not " : "", issues);
+    }
+}
+
+/* A glTF from the parts of tiny_gltf's document, as path (a .glb when name says so). */
+static void write_gltf(const char *name, const char *json, char *path, size_t cap)
+{
+    size_t n = strlen(json);
+    if (!strstr(name, ".glb")) {
+        write_file(name, json, n, path, cap);
+        return;
+    }
+    size_t padded = (n + 3) & ~(size_t)3;
+    unsigned char glb[4096] = "glTF";
+    assert_true(20 + padded <= sizeof(glb));
+    uint32_t words[4] = {2, (uint32_t)(20 + padded), (uint32_t)padded, 0x4E4F534A};
+    memcpy(glb + 4, words, sizeof(words));
+    memcpy(glb + 20, json, n);
+    memset(glb + 20 + n, ' ', padded - n);
+    write_file(name, glb, 20 + padded, path, cap);
+}
+
+/* The types through rb_scene_load: strict by default (one error naming the file and the pointer,
+ * .gltf and .glb alike), lenient on request (warnings; tinygltf skips what does not fit). */
+static void test_scene_load_strict_and_lenient(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *name, *node, *prim, *pointer_problem;
+    } cases[] = {
+        {"prims.gltf", "\"mesh\":0", "{}", "/meshes/0/primitives: expected array, found object"},
+        {"scale.gltf", "\"mesh\":0,\"scale\":\"not a number\"",
+         "[{\"attributes\":{\"POSITION\":0}}]",
+         "/nodes/0/scale: expected array of 3 numbers, found string"},
+        {"mesh.glb", "\"mesh\":\"0\"", "[{\"attributes\":{\"POSITION\":0}}]",
+         "/nodes/0/mesh: expected non-negative integer, found string"},
+        {"attributes.glb", "\"mesh\":0", "[{\"mode\":4}]",
+         "/meshes/0/primitives/0/attributes: expected object, found nothing"},
+    };
+    for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+        char json[2048], path[512], want[1024];
+        snprintf(json, sizeof(json),
+                 "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],"
+                 "\"nodes\":[{%s}],\"meshes\":[{\"primitives\":%s}],"
+                 "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"type\":\"VEC3\","
+                 "\"count\":3}],\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+                 "\"buffers\":[{\"byteLength\":36,\"uri\":\"data:application/octet-stream;"
+                 "base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA\"}]}",
+                 cases[i].node, cases[i].prim);
+        write_gltf(cases[i].name, json, path, sizeof(path));
+        struct rb_scene *s = NULL;
+        struct rb_err err = RB_ERR_INIT;
+        snprintf(want, sizeof(want), "scene '%s': %s", path, cases[i].pointer_problem);
+        log_text[0] = '\0';
+        assert_int_equal(rb_scene_load(path, 0, &s, &err), RB_E_PARSE);
+        assert_null(s);
+        assert_string_equal(err.msg, want);
+        assert_string_equal(log_text, "");
+
+        assert_int_equal(rb_scene_load(path, RB_SCENE_LOAD_LENIENT, &s, &err), RB_OK);
+        assert_non_null(strstr(log_text, want));
+        if (i == 2) /* the string is no mesh index to tinygltf */
+            assert_int_equal(s->nodes[0].mesh, RB_SCENE_NONE);
+        if (i == 0 || i == 3) /* no primitive survives */
+            assert_int_equal(s->primitive_count, 0);
+        if (i == 1) { /* the scale is the default */
+            assert_int_equal(s->primitive_count, 1);
+            assert_float_equal(s->nodes[0].scale.x, 1.0f, 0.0f);
+        }
+        rb_scene_destroy(s);
+    }
+}
+
+/* tinygltf's own complaints: errors when they mean the file is broken (strict), and not at all
+ * for the valid files it complains about. */
+static void test_scene_load_tinygltf_errors(void **state)
+{
+    (void)state;
+    char path[512];
+    struct rb_err err = RB_ERR_INIT;
+    struct rb_scene *s = NULL;
+
+    /* a .glb whose JSON chunk ends off a 4-byte boundary */
+    char json[2048];
+    snprintf(json, sizeof(json), tiny_gltf, "", "", "", "3");
+    size_t n = strlen(json);
+    while (n % 4 != 1)
+        json[n++] = ' ';
+    json[n] = '\0';
+    unsigned char glb[4096] = "glTF";
+    uint32_t words[4] = {2, (uint32_t)(20 + n), (uint32_t)n, 0x4E4F534A};
+    memcpy(glb + 4, words, sizeof(words));
+    memcpy(glb + 20, json, n);
+    write_file("misaligned.glb", glb, 20 + n, path, sizeof(path));
+    assert_int_equal(rb_scene_load(path, 0, &s, &err), RB_E_PARSE);
+    assert_non_null(strstr(err.msg, path));
+    assert_non_null(strstr(err.msg, "4-byte boundary"));
+    log_text[0] = '\0';
+    assert_int_equal(rb_scene_load(path, RB_SCENE_LOAD_LENIENT, &s, &err), RB_OK);
+    assert_non_null(strstr(log_text, "4-byte boundary"));
+    rb_scene_destroy(s);
+
+    /* valid: a skin without inverseBindMatrices, a channel whose target node is left to an
+     * extension (dropped, with a warning) */
+    log_text[0] = '\0';
+    assert_int_equal(load_tiny("valid.gltf",
+                               "\"skins\":[{\"joints\":[0]}],\"animations\":[{\"samplers\":"
+                               "[{\"input\":1,\"output\":0}],\"channels\":[{\"sampler\":0,"
+                               "\"target\":{\"path\":\"translation\"}}]}],",
+                               "", "", "3", &err, path, sizeof(path)),
+                     RB_OK);
+    assert_null(strstr(log_text, "inverseBindMatrices"));
+    assert_non_null(strstr(log_text, "animation.channels.target"));
 }
 
 int main(void)
@@ -799,6 +1139,12 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_missing_texture, setup_tmp, teardown_tmp),
         cmocka_unit_test_setup_teardown(test_unsupported_extension, setup_tmp, teardown_tmp),
         cmocka_unit_test_setup_teardown(test_bad_references, setup_tmp, teardown_tmp),
+        cmocka_unit_test_setup_teardown(test_json_walker, setup_log, teardown_log),
+        cmocka_unit_test_setup_teardown(test_json_rules_table, setup_log, teardown_log),
+        cmocka_unit_test_setup_teardown(test_json_rules_each, setup_log, teardown_log),
+        cmocka_unit_test_setup_teardown(test_scene_load_strict_and_lenient, setup_tmp,
+                                        teardown_tmp),
+        cmocka_unit_test_setup_teardown(test_scene_load_tinygltf_errors, setup_tmp, teardown_tmp),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
