@@ -1,6 +1,7 @@
 #!/bin/sh
 # make lint: man pages (mandoc and man warnings), and the module include rules of STYLE.md:
-# data flows job -> scene -> passes (on gpu) -> integrators, io beside; nothing includes
+# data flows job -> scene -> passes (on gpu) -> integrators -> render (the run: integrators or
+# reference, then io), io beside; nothing includes
 # another module's private _int.h header.
 set -u
 status=0
@@ -20,6 +21,7 @@ allowed() { # module -> modules it may include
     passes) echo "core gpu scene job passes" ;;
     integrators) echo "core gpu scene job passes integrators" ;;
     analysis) echo "core io analysis" ;;
+    render) echo "core gpu scene job integrators reference io render" ;;
     *) echo "" ;;
     esac
 }

@@ -94,6 +94,17 @@ uint64_t rb_hash64(const void *data, size_t size, uint64_t seed);
  * GB/s where FNV-1a does one byte at a time. Chain by passing the previous value as seed. */
 uint64_t rb_hash_bulk(const void *data, size_t size, uint64_t seed);
 
+/* ---- frame results ------------------------------------------------------------------------- */
+
+/* One pass of a frame, as the timing sidecar reports it: a pass recorded many times in a frame
+ * (a VPL map per VPL) is one entry, its times summed and its recordings counted. */
+struct rb_pass_time {
+    char name[32];
+    double gpu_ms; /* summed over its recordings; 0 for a CPU pass */
+    double cpu_ms; /* passes that run on the CPU (the reference's trace); 0 otherwise */
+    uint32_t count;
+};
+
 /* ---- math ---------------------------------------------------------------------------------- */
 
 #define RB_PI 3.14159265358979323846f
@@ -162,5 +173,22 @@ static inline float rb_clampf(float x, float lo, float hi)
 #ifdef __cplusplus
 }
 #endif
+
+/* What one frame produced, whichever renderer made it (a GPU integrator or the CPU reference);
+ * the library writes it out (EXR layers, sidecars). Pointers are owned by the renderer and valid
+ * until its next render or destroy. */
+struct rb_frame_result {
+    int frame;
+    double time_s;
+    uint32_t width_px, height_px;
+    const float *pixels; /* RB_OUT_FLOATS floats per pixel in the RB_OUT_* order of
+                          * shaders/common/shared.h, rows top to bottom */
+    const struct rb_pass_time *passes;
+    uint32_t pass_count;
+    struct rb_mat4 world_to_camera, world_to_ndc; /* column-major; NDC as Vulkan: y down, z 0..1 */
+    uint32_t spp;             /* samples per pixel reached (the reference); 0 otherwise */
+    uint64_t ray_count;       /* rays traced (the reference); 0 otherwise */
+    uint32_t nonfinite_count; /* NaN or infinite floats among the pixels */
+};
 
 #endif

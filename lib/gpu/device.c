@@ -384,15 +384,6 @@ enum rb_status rb_gpu_create(const struct rb_gpu_desc *desc, struct rb_gpu **out
         st = rb_gpu_fail(err, vr, "vkCreateFence", NULL);
         goto fail;
     }
-    VkQueryPoolCreateInfo qpci = {
-        .sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO,
-        .queryType = VK_QUERY_TYPE_TIMESTAMP,
-        .queryCount = 2 * RB_GPU_MAX_PASSES,
-    };
-    if ((vr = vkCreateQueryPool(gpu->device, &qpci, NULL, &gpu->queries)) < 0) {
-        st = rb_gpu_fail(err, vr, "vkCreateQueryPool", NULL);
-        goto fail;
-    }
     struct {
         VkSamplerAddressMode mode_u, mode_v;
         VkFilter filter;
@@ -443,7 +434,7 @@ void rb_gpu_destroy(struct rb_gpu *gpu)
         vkDestroySampler(gpu->device, gpu->nearest_sampler, NULL);
         vkDestroySampler(gpu->device, gpu->clamp_sampler, NULL);
         vkDestroySampler(gpu->device, gpu->linear_sampler, NULL);
-        vkDestroyQueryPool(gpu->device, gpu->queries, NULL);
+        rb_gpu_queries_release(gpu);
         vkDestroyFence(gpu->device, gpu->fence, NULL);
         vkDestroyCommandPool(gpu->device, gpu->pool, NULL);
         vkDestroyDevice(gpu->device, NULL);

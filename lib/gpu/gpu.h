@@ -9,8 +9,6 @@
 #include <stdio.h>
 #include <vulkan/vulkan.h>
 
-#define RB_GPU_MAX_PASSES 64
-
 struct rb_gpu_desc {
     const char *device; /* name substring or index; NULL: lavapipe, else the first device */
     bool validate;      /* enable VK_LAYER_KHRONOS_validation; any message fails the run */
@@ -41,12 +39,15 @@ struct rb_gpu {
     VkSampler nearest_sampler; /* clamp to edge, nearest */
     VkSampler env_sampler;     /* equirectangular maps: u repeats (azimuth), v clamps; linear */
 
-    /* timestamps: 2 queries per pass, recorded by rb_gpu_pass_begin/end */
-    VkQueryPool queries;
+    /* timestamps (query.c): 2 queries per pass, recorded by rb_gpu_pass_begin/end into pools
+     * that are added as a frame records more passes */
+    VkQueryPool *query_pools;
+    uint32_t query_pool_count;
     double timestamp_period_ns;
     uint64_t timestamp_mask;
-    char pass_names[RB_GPU_MAX_PASSES][32];
-    uint32_t pass_count;
+    struct rb_gpu_pass *passes; /* this frame's, in recording order */
+    uint32_t pass_count, pass_cap;
+    enum rb_status timing_status; /* a pool or record that could not be made: said at submit */
 
     PFN_vkCmdPushDescriptorSetKHR push_descriptor_set;
     PFN_vkCmdBeginDebugUtilsLabelEXT begin_label;
@@ -143,11 +144,27 @@ enum rb_status rb_gpu_submit_wait(struct rb_gpu *gpu, struct rb_err *err);
 enum rb_status rb_gpu_oneshot_begin(struct rb_gpu *gpu, VkCommandBuffer *out, struct rb_err *err);
 enum rb_status rb_gpu_oneshot_end(struct rb_gpu *gpu, VkCommandBuffer cmd, struct rb_err *err);
 
-/* Opens a named pass: debug label and start timestamp. Passes may not nest. */
+/* ---- pass timestamps (query.c) -------------------------------------------------------------- */
+
+/* One recorded pass of the frame: its name and, after rb_gpu_pass_times, its GPU time. */
+struct rb_gpu_pass {
+    char name[32];
+    double gpu_ms;
+};
+
+/* Opens a named pass: debug label and start timestamp. Passes may not nest, and are recorded
+ * outside render-pass instances (a new query pool is reset in the command buffer when the
+ * frame's passes outgrow the pools). There is no fixed limit on passes a frame; an allocation
+ * that fails stops the timing, and rb_gpu_pass_times reports it. */
 void rb_gpu_pass_begin(struct rb_gpu *gpu, VkCommandBuffer cmd, const char *name);
 void rb_gpu_pass_end(struct rb_gpu *gpu, VkCommandBuffer cmd);
-/* After rb_gpu_submit_wait: the GPU milliseconds of pass i (0 <= i < gpu->pass_count). */
-enum rb_status rb_gpu_pass_times(struct rb_gpu *gpu, double *out_ms, struct rb_err *err);
+/* After rb_gpu_submit_wait: fills gpu->passes[i].gpu_ms for the frame's gpu->pass_count passes.
+ * RB_E_NOMEM or RB_E_VULKAN when the timing could not be recorded. */
+enum rb_status rb_gpu_pass_times(struct rb_gpu *gpu, struct rb_err *err);
+/* Resets the frame's pass records and the pools' queries in cmd (rb_gpu_begin calls it). */
+void rb_gpu_queries_reset(struct rb_gpu *gpu, VkCommandBuffer cmd);
+/* Destroys the query pools and pass records (rb_gpu_destroy calls it). */
+void rb_gpu_queries_release(struct rb_gpu *gpu);
 
 /* ---- pipelines ----------------------------------------------------------------------------- */
 

@@ -1,5 +1,5 @@
 /* The frame resources every integrator shares: the scene on the GPU (geometry, materials,
- * textures as arrays, since lavapipe has no descriptor indexing), the two animation slots,
+ * textures as arrays, since lavapipe has no descriptor indexing), the animation slots,
  * lights and shadow maps, the environment, the G-buffer and the readback buffer. */
 #include "integrators/integrators_int.h"
 
@@ -278,7 +278,7 @@ static enum rb_status upload_geometry(struct rb_gpu *gpu, const struct rb_scene 
             gpu, scene->morph_deltas,
             (VkDeviceSize)scene->morph_delta_count * sizeof(struct rb_scene_morph_delta),
             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "morph.deltas", &frame->morph_deltas, err);
-    for (int s = 0; s < 2 && st == RB_OK; s++) {
+    for (uint32_t s = 0; s < frame->slot_count && st == RB_OK; s++) {
         struct rb_frame_slot *slot = &frame->slots[s];
         st = make_buffer(gpu, (VkDeviceSize)pose->instance_count * sizeof(struct rb_gpu_instance),
                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "instances", &slot->instances,
@@ -293,8 +293,8 @@ static enum rb_status upload_geometry(struct rb_gpu *gpu, const struct rb_scene 
                              err);
         if (st == RB_OK)
             st = make_buffer(gpu, vcount * sizeof(struct rb_gpu_vertex),
-                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "vertices.world",
-                             &slot->vertices, err);
+                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                             false, "vertices.world", &slot->vertices, err);
     }
     return st;
 }
@@ -354,8 +354,8 @@ static enum rb_status upload_env(struct rb_gpu *gpu, const struct rb_integrator_
 }
 
 enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc *desc,
-                             const struct rb_moment *first, struct rb_frame *frame,
-                             struct rb_err *err)
+                             const struct rb_moment *first, uint32_t slot_count,
+                             struct rb_frame *frame, struct rb_err *err)
 {
     const struct rb_job *job = desc->job;
     const struct rb_scene *scene = desc->scene;
@@ -363,6 +363,10 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
     memset(frame, 0, sizeof(*frame));
     frame->width_px = w;
     frame->height_px = h;
+    frame->slots = calloc(slot_count, sizeof(*frame->slots));
+    if (!frame->slots)
+        return rb_errf(err, RB_E_NOMEM, "out of memory for %u frame slots", slot_count);
+    frame->slot_count = slot_count;
 
     enum rb_status st =
         make_buffer(gpu, sizeof(struct rb_gpu_globals), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true,
@@ -427,8 +431,8 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
                         &frame->direct, err);
     if (st == RB_OK)
         st = make_buffer(gpu, (VkDeviceSize)w * h * RB_OUT_FLOATS * sizeof(float),
-                         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "readback", &frame->readback,
-                         err);
+                         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                         true, "readback", &frame->readback, err);
     if (st)
         return st;
     frame->beauty = &frame->direct;
@@ -444,6 +448,10 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
     for (size_t i = 0; i < sizeof(general) / sizeof(general[0]); i++)
         rb_gpu_image_barrier(gpu, cmd, general[i], VK_IMAGE_LAYOUT_UNDEFINED,
                              VK_IMAGE_LAYOUT_GENERAL);
+    /* Defined contents for the slots a chunk's first warm-up frame reads as its past. */
+    for (uint32_t s = 0; s < frame->slot_count; s++)
+        vkCmdFillBuffer(cmd, frame->slots[s].vertices.buffer, 0, VK_WHOLE_SIZE, 0);
+    rb_gpu_barrier(cmd);
     return rb_gpu_oneshot_end(gpu, cmd, err);
 }
 
@@ -461,12 +469,13 @@ void rb_frame_release(struct rb_gpu *gpu, struct rb_frame *frame)
     rb_gpu_buffer_release(gpu, &frame->shadow_views);
     rb_gpu_buffer_release(gpu, &frame->lights);
     rb_gpu_image_release(gpu, &frame->env_map);
-    for (int s = 1; s >= 0; s--) {
+    for (uint32_t s = frame->slot_count; s-- > 0 && frame->slots;) {
         rb_gpu_buffer_release(gpu, &frame->slots[s].vertices);
         rb_gpu_buffer_release(gpu, &frame->slots[s].weights);
         rb_gpu_buffer_release(gpu, &frame->slots[s].joints);
         rb_gpu_buffer_release(gpu, &frame->slots[s].instances);
     }
+    free(frame->slots);
     rb_gpu_image_release(gpu, &frame->linear_textures);
     rb_gpu_image_release(gpu, &frame->srgb_textures);
     rb_gpu_buffer_release(gpu, &frame->materials);

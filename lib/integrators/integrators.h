@@ -1,5 +1,8 @@
-/* Integrators: a frame as an ordered list of passes over shared frame resources. `direct` is
- * the baseline every other integrator adds to. The caller writes the result (lib/io). */
+/* Integrators: one frame driver (driver.c) runs every GPU integrator. An integrator is an ops
+ * table (direct.c; bdpt and hybrid join the same way) with its own resources and the ordered
+ * passes of its frame; the driver evaluates the moment, fills the frame slots, records,
+ * submits, groups the pass timings and fills the result. `direct` is the baseline every other
+ * integrator adds to. The caller writes the result (lib/render). */
 #ifndef RB_INTEGRATORS_INTEGRATORS_H
 #define RB_INTEGRATORS_INTEGRATORS_H
 
@@ -19,35 +22,27 @@ struct rb_integrator_desc {
     const float *env_rgba;        /* equirectangular RGBA, or NULL for the job's uniform color */
     uint32_t env_width_px, env_height_px;
     const struct rb_scene_setup *setup; /* borrowed, or NULL: the integrator decides its own */
-};
-
-struct rb_pass_timing {
-    char name[32];
-    double gpu_ms;
-};
-
-/* What one frame produced. pixels holds RB_OUT_FLOATS floats per pixel in RB_OUT_* order
- * (shaders/common/shared.h), rows top to bottom; valid until the next render or destroy. */
-struct rb_frame_result {
-    int frame;
-    double time_s;
-    uint32_t width_px, height_px;
-    const float *pixels;
-    struct rb_pass_timing passes[RB_GPU_MAX_PASSES];
-    uint32_t pass_count;
-    struct rb_mat4 world_to_camera, world_to_ndc; /* column-major; NDC as Vulkan: y down, z 0..1 */
-    uint32_t nonfinite_count; /* NaN or infinite floats in pixels (all layers); 0 when clean */
+    uint32_t history_frames; /* 0: the integrator's own; more: keep (and warm up) this many
+                              * earlier frames (tests of the history contract) */
 };
 
 /* Creates the integrator the job names, uploading the scene. RB_E_UNSUPPORTED for an
- * integrator that does not exist yet; RB_E_OVERFLOW-free: light lists that do not fit are
- * errors naming the counts. */
+ * integrator that does not exist yet; light lists that do not fit are errors naming the
+ * counts. */
 enum rb_status rb_integrator_create(const struct rb_integrator_desc *desc,
                                     struct rb_integrator **out, struct rb_err *err);
 
-/* Renders one frame (time = frame / rate) and reads it back. Frames may come in any order; the
- * result of a frame never depends on which frames were rendered before it. A frame with NaN or
- * infinite values is still a result: it is counted in nonfinite_count and logged as a warning. */
+/* How many earlier frames a frame's state depends on (direct: 1, its motion vectors read the
+ * previous frame's vertices; an integrator with temporal caches: its cache count - 1). */
+uint32_t rb_integrator_history_frames(const struct rb_integrator *it);
+
+/* Renders one frame (time = frame / rate) and reads it back.
+ * The contract of history: the state a frame is rendered from is a function of that frame and
+ * the history_frames frames before it, nothing earlier. When the frame before this one was not
+ * the last rendered (the first frame of a run or of a chunk, or a jump), the driver first
+ * renders the history_frames frames before it as warm-up frames, recording what they leave for
+ * later frames and writing nothing; so a chunk of a sequence renders the same bits as the same
+ * frames of a whole run, whatever the history length. */
 enum rb_status rb_integrator_render(struct rb_integrator *it, int frame,
                                     struct rb_frame_result *out, struct rb_err *err);
 

@@ -1,4 +1,5 @@
-/* Private to lib/integrators: building and updating the frame resources the passes share. */
+/* Private to lib/integrators: the frame driver's state, the ops table an integrator fills, and
+ * building and updating the frame resources the passes share (frame.c). */
 #ifndef RB_INTEGRATORS_INTEGRATORS_INT_H
 #define RB_INTEGRATORS_INTEGRATORS_INT_H
 
@@ -14,12 +15,68 @@ struct rb_moment {
     uint32_t light_count;
 };
 
+/* What the driver hands an integrator's record function: the frame being recorded. */
+struct rb_frame_ctx {
+    int frame;
+    bool is_warmup;                 /* record only what later frames read; nothing is read back */
+    struct rb_frame_slot *cur;      /* this frame's slot: frame mod slot_count */
+    struct rb_frame_slot *prev;     /* the previous frame's slot, filled when it was rendered */
+    const struct rb_moment *moment; /* this frame's camera, lights and pose */
+};
+
+/* An integrator: its resources and the ordered passes of its frame. */
+struct rb_integrator_ops {
+    const char *name;
+    /* Earlier frames a frame's state depends on (the history contract in integrators.h). */
+    uint32_t (*history_frames)(const struct rb_job *job);
+    /* Creates the integrator's own passes and resources once the driver's frame exists. */
+    enum rb_status (*create)(struct rb_integrator *it, void **state, struct rb_err *err);
+    /* Records the frame: each pass between rb_integrator_pass_begin and _end. Cannot fail. */
+    void (*record)(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
+                   const struct rb_frame_ctx *ctx);
+    /* After the submit: what record's passes counted (e.g. non-finite output values). */
+    void (*collect)(struct rb_integrator *it, void *state, struct rb_frame_result *out);
+    void (*destroy)(struct rb_integrator *it, void *state);
+};
+
+extern const struct rb_integrator_ops rb_integrator_direct;
+
+/* rb_integrator_create with the given ops instead of the job's integrator's (tests drive the
+ * driver with integrators of their own). */
+enum rb_status rb_integrator_create_with(const struct rb_integrator_desc *desc,
+                                         const struct rb_integrator_ops *ops,
+                                         struct rb_integrator **out, struct rb_err *err);
+
+/* The driver (driver.c): what every integrator shares. Integrators read it; the driver writes. */
+struct rb_integrator {
+    const struct rb_integrator_ops *ops;
+    void *state; /* the integrator's own */
+    struct rb_gpu *gpu;
+    const struct rb_job *job;
+    const struct rb_scene *scene;
+    struct rb_scene_setup setup;
+    bool has_env_map;
+    uint32_t history_frames;
+    uint32_t *clips;
+    struct rb_anim_selection sel;
+    struct rb_moment cur, prev;
+    struct rb_frame frame;
+    bool has_last;
+    int last_frame;              /* the last frame rendered (warm-up or not) */
+    struct rb_pass_time *groups; /* the last frame's passes, grouped by name */
+    uint32_t group_count, group_cap;
+};
+
+/* Opens and closes one timed pass of the frame; the driver puts a full barrier after each. */
+void rb_integrator_pass_begin(struct rb_integrator *it, VkCommandBuffer cmd, const char *name);
+void rb_integrator_pass_end(struct rb_integrator *it, VkCommandBuffer cmd);
+
 /* Creates every shared resource for the scene at the job's resolution: geometry, materials,
- * textures, shadow maps (sized for light_count lights of the kinds in lights), environment,
- * G-buffer and readback. All images end in VK_IMAGE_LAYOUT_GENERAL. */
+ * textures, slot_count animation slots, shadow maps (sized for light_count lights of the kinds
+ * in lights), environment, G-buffer and readback. All images end in VK_IMAGE_LAYOUT_GENERAL. */
 enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc *desc,
-                             const struct rb_moment *first, struct rb_frame *frame,
-                             struct rb_err *err);
+                             const struct rb_moment *first, uint32_t slot_count,
+                             struct rb_frame *frame, struct rb_err *err);
 void rb_frame_release(struct rb_gpu *gpu, struct rb_frame *frame);
 
 /* Evaluates animation, camera and lights at time_s. */

@@ -830,6 +830,7 @@ enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t
         json_string(&t, tm->passes[i].name);
         text_puts(&t, ", \"gpu_ms\": ");
         json_number(&t, tm->passes[i].gpu_ms);
+        text_printf(&t, ", \"count\": %u", tm->passes[i].count);
         if (tm->passes[i].cpu_ms > 0.0) {
             text_puts(&t, ", \"cpu_ms\": ");
             json_number(&t, tm->passes[i].cpu_ms);

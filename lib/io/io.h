@@ -112,16 +112,10 @@ const char *rb_io_default_ocio_config(void);
 
 /* ---- timing sidecar ------------------------------------------------------------------- */
 
-struct rb_io_pass_time {
-    const char *name;
-    double gpu_ms;
-    double cpu_ms; /* for passes that run on the CPU (the reference); written when > 0 */
-};
-
 struct rb_io_timing {
     int frame;
     double time_s;
-    const struct rb_io_pass_time *passes;
+    const struct rb_pass_time *passes; /* one entry a pass name (core.h), count its recordings */
     size_t pass_count;
     double wall_ms;
     const char *device;
@@ -135,7 +129,8 @@ struct rb_io_timing {
 };
 
 /* Writes NAME.####.timing.json atomically:
- * {"frame": 12, "time_s": 0.5, "passes": [{"name": "gbuffer", "gpu_ms": 1.25}, ...],
+ * {"frame": 12, "time_s": 0.5, "passes": [{"name": "gbuffer", "gpu_ms": 1.25, "count": 1}, ...],
+ * (cpu_ms too where it is > 0)
  *  "wall_ms": 40.1, "device": "...", "driver": "...", ..., "nonfinite": 0}. */
 enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t,
                                   struct rb_err *err);

@@ -20,8 +20,8 @@ _Static_assert(sizeof(struct rb_scene_morph_delta) == RB_MORPH_DELTA_FLOATS * 4,
 #define RB_GBUFFER_COLOR_COUNT 6
 
 /* Per-time geometry state: the animate pass fills vertices from instances, joints and weights.
- * Two slots, chosen by frame parity, so a frame's motion vectors can use the previous frame's
- * vertices whether or not that frame was rendered in this run. */
+ * Frame f uses slot f mod slot_count (history_frames + 1 slots), so a frame's motion vectors
+ * read the previous frame's vertices from the slot that frame filled. */
 struct rb_frame_slot {
     struct rb_gpu_buffer instances; /* struct rb_gpu_instance, host-visible */
     struct rb_gpu_buffer joints;    /* mat4, host-visible */
@@ -41,7 +41,8 @@ struct rb_frame {
     struct rb_gpu_buffer materials;                     /* struct rb_gpu_material */
     struct rb_gpu_image srgb_textures, linear_textures; /* RGBA8 arrays, one layer a texture */
 
-    struct rb_frame_slot slots[2];
+    struct rb_frame_slot *slots; /* slot_count of them */
+    uint32_t slot_count;
     uint32_t instance_count;
     const struct rb_gpu_instance *instances; /* host copy of the slot being animated */
     uint32_t vertex_count;                   /* world vertices */

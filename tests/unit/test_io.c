@@ -615,7 +615,7 @@ static void test_default_config(void **state)
 static void test_timing_json(void **state)
 {
     (void)state;
-    const struct rb_io_pass_time passes[] = {{"gbuffer", 1.25, 0.0}, {"shadow", 0.5, 0.0}};
+    const struct rb_pass_time passes[] = {{"gbuffer", 1.25, 0.0, 1}, {"shadow", 0.5, 0.0, 6}};
     const struct rb_io_timing t = {
         .frame = 12,
         .time_s = 0.5,
@@ -638,8 +638,8 @@ static void test_timing_json(void **state)
                            "  \"frame\": 12,\n"
                            "  \"time_s\": 0.5,\n"
                            "  \"passes\": [\n"
-                           "    {\"name\": \"gbuffer\", \"gpu_ms\": 1.25},\n"
-                           "    {\"name\": \"shadow\", \"gpu_ms\": 0.5}\n"
+                           "    {\"name\": \"gbuffer\", \"gpu_ms\": 1.25, \"count\": 1},\n"
+                           "    {\"name\": \"shadow\", \"gpu_ms\": 0.5, \"count\": 6}\n"
                            "  ],\n"
                            "  \"wall_ms\": 40.1,\n"
                            "  \"gpu_total_ms\": 1.75,\n"
@@ -658,7 +658,7 @@ static void test_timing_escapes(void **state)
 {
     (void)state;
     /* 0.1 + 0.2 needs 17 digits to read back; NaN and infinity are not JSON. */
-    const struct rb_io_pass_time passes[] = {{"a\"b", 0.1, 0.0}, {"c", 0.2, 0.0}};
+    const struct rb_pass_time passes[] = {{"a\"b", 0.1, 0.0, 1}, {"c", 0.2, 0.0, 1}};
     const struct rb_io_timing t = {
         .frame = -3,
         .time_s = INFINITY,
@@ -678,8 +678,8 @@ static void test_timing_escapes(void **state)
                            "  \"frame\": -3,\n"
                            "  \"time_s\": null,\n"
                            "  \"passes\": [\n"
-                           "    {\"name\": \"a\\\"b\", \"gpu_ms\": 0.1},\n"
-                           "    {\"name\": \"c\", \"gpu_ms\": 0.2}\n"
+                           "    {\"name\": \"a\\\"b\", \"gpu_ms\": 0.1, \"count\": 1},\n"
+                           "    {\"name\": \"c\", \"gpu_ms\": 0.2, \"count\": 1}\n"
                            "  ],\n"
                            "  \"wall_ms\": null,\n"
                            "  \"gpu_total_ms\": 0.30000000000000004,\n"

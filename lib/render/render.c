@@ -1,0 +1,369 @@
+/* A run of a job: the renderer (the GPU frame driver or the CPU reference) behind one result
+ * type, the --resume decision, and the frame's files. Layers go into the EXR in the order of
+ * RB_OUT_* (shaders/common/shared.h); the metadata holds nothing that depends on the time of the
+ * render, so equal pixels give equal bytes. */
+#include "render/render.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "gpu/gpu.h"
+#include "integrators/integrators.h"
+#include "io/io.h"
+#include "reference/reference.h"
+#include "shared.h"
+
+struct rb_render {
+    const struct rb_job *job;
+    const struct rb_scene_setup *setup;
+    struct rb_gpu *gpu;
+    struct rb_integrator *it;
+    struct rb_reference *ref;
+    bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
+    void *user;
+    bool was_stopped; /* on_pass said stop during this frame */
+    char hash[17];    /* the setup's job hash, as the EXR records it */
+    char device[256], driver[256];
+    struct rb_pass_time trace; /* the reference's one pass */
+    float *scratch;            /* the EXR's and the preview's layer copies */
+};
+
+static bool on_reference_pass(void *user, uint32_t done, uint32_t total)
+{
+    struct rb_render *r = user;
+    if (r->on_pass && !r->on_pass(r->user, done, total)) {
+        r->was_stopped = true;
+        return false;
+    }
+    return true;
+}
+
+enum rb_status rb_render_create(const struct rb_render_desc *desc, struct rb_render **out,
+                                struct rb_err *err)
+{
+    const struct rb_job *job = desc->job;
+    struct rb_render *r = calloc(1, sizeof(*r));
+    if (!r)
+        return rb_errf(err, RB_E_NOMEM, "out of memory");
+    r->job = job;
+    r->setup = desc->setup;
+    r->on_pass = desc->on_pass;
+    r->user = desc->user;
+    snprintf(r->hash, sizeof(r->hash), "%016llx", (unsigned long long)desc->setup->job_hash);
+    enum rb_status st = RB_OK;
+    r->scratch = malloc((size_t)job->width_px * job->height_px * RB_OUT_FLOATS * sizeof(float));
+    if (!r->scratch) {
+        st = rb_errf(err, RB_E_NOMEM, "out of memory for a %ux%u frame", job->width_px,
+                     job->height_px);
+        goto fail;
+    }
+    if (job->integrator.name == RB_INTEGRATOR_REFERENCE) {
+        long cores = sysconf(_SC_NPROCESSORS_ONLN);
+        snprintf(r->device, sizeof(r->device), "cpu (%u threads)",
+                 desc->thread_count ? desc->thread_count : (unsigned)(cores > 0 ? cores : 1));
+        snprintf(r->driver, sizeof(r->driver), "raybundle reference %s (Embree 3)", RB_VERSION);
+        st = rb_reference_create(&(struct rb_reference_desc){.job = job,
+                                                             .scene = desc->scene,
+                                                             .env_rgba = desc->env_rgba,
+                                                             .env_width_px = desc->env_width_px,
+                                                             .env_height_px = desc->env_height_px,
+                                                             .setup = desc->setup,
+                                                             .thread_count = desc->thread_count,
+                                                             .on_pass = on_reference_pass,
+                                                             .user = r},
+                                 &r->ref, err);
+    } else {
+        st =
+            rb_gpu_create(&(struct rb_gpu_desc){.device = desc->device, .validate = desc->validate},
+                          &r->gpu, err);
+        if (st == RB_OK) {
+            rb_strlcpy(r->device, r->gpu->device_name, sizeof(r->device));
+            rb_strlcpy(r->driver, r->gpu->driver, sizeof(r->driver));
+            st = rb_integrator_create(
+                &(struct rb_integrator_desc){.job = job,
+                                             .scene = desc->scene,
+                                             .gpu = r->gpu,
+                                             .env_rgba = desc->env_rgba,
+                                             .env_width_px = desc->env_width_px,
+                                             .env_height_px = desc->env_height_px,
+                                             .setup = desc->setup},
+                &r->it, err);
+        }
+    }
+    if (st)
+        goto fail;
+    *out = r;
+    return RB_OK;
+fail:
+    rb_render_destroy(r);
+    return st;
+}
+
+void rb_render_destroy(struct rb_render *r)
+{
+    if (!r)
+        return;
+    rb_reference_destroy(r->ref);
+    rb_integrator_destroy(r->it);
+    rb_gpu_destroy(r->gpu);
+    free(r->scratch);
+    free(r);
+}
+
+const char *rb_render_device(const struct rb_render *r)
+{
+    return r->device;
+}
+
+const char *rb_render_driver(const struct rb_render *r)
+{
+    return r->driver;
+}
+
+int rb_render_last_frame(const struct rb_job *job, const struct rb_scene *scene)
+{
+    if (job->frame_end >= 0)
+        return job->frame_end;
+    uint32_t clips[64], n = 0;
+    if (rb_scene_select_clips(scene, job, clips, 64, &n, NULL) || n == 0)
+        return job->frame_start;
+    double dur = 0.0;
+    for (uint32_t i = 0; i < n; i++)
+        if (scene->animations[clips[i]].duration_s > dur)
+            dur = scene->animations[clips[i]].duration_s;
+    double speed = job->animation.speed > 0.0 ? job->animation.speed : 1.0;
+    int frames = (int)ceil(dur / speed * job->rate_fps - 1e-6);
+    return job->frame_start + (frames > 1 ? frames - 1 : 0);
+}
+
+/* ---- resume --------------------------------------------------------------------------------- */
+
+enum rb_render_verdict rb_render_resume_verdict(const struct rb_render *r, const char *path)
+{
+    char timing[4096], recorded[32];
+    if (rb_io_sidecar_path(path, ".timing.json", timing, sizeof(timing), NULL) != RB_OK ||
+        !rb_io_image_is_complete(path) || access(timing, R_OK) != 0)
+        return RB_RENDER_NEW;
+    if (!rb_io_image_attr(path, "raybundle:jobHash", recorded, sizeof(recorded)) ||
+        strcmp(recorded, r->hash) != 0)
+        return RB_RENDER_STALE;
+    return RB_RENDER_KEEP;
+}
+
+/* ---- writing -------------------------------------------------------------------------------- */
+
+/* Splits the packed readback into the EXR's layers and writes it with its metadata. */
+static enum rb_status write_exr(const struct rb_render *r, const char *path,
+                                const struct rb_frame_result *f, struct rb_err *err)
+{
+    size_t n = (size_t)f->width_px * f->height_px;
+    static const char *const rgba[] = {"R", "G", "B", "A"};
+    static const char *const rgb[] = {"R", "G", "B"};
+    static const char *const xyz[] = {"X", "Y", "Z"};
+    static const char *const z[] = {"Z"};
+    static const struct {
+        const char *name;
+        uint32_t offset, count;
+        const char *const *channels;
+    } layers[] = {
+        {NULL, RB_OUT_BEAUTY, 4, rgba},        {"direct", RB_OUT_DIRECT, 3, rgb},
+        {"indirect", RB_OUT_INDIRECT, 3, rgb}, {"albedo", RB_OUT_ALBEDO, 3, rgb},
+        {"normal", RB_OUT_NORMAL, 3, xyz},     {"depth", RB_OUT_DEPTH, 1, z},
+        {"motion", RB_OUT_MOTION, 2, xyz},
+    };
+    enum { LAYER_COUNT = sizeof(layers) / sizeof(layers[0]) };
+    struct rb_io_layer out[LAYER_COUNT];
+    float *p = r->scratch;
+    for (int l = 0; l < LAYER_COUNT; l++) {
+        for (size_t i = 0; i < n; i++)
+            for (uint32_t c = 0; c < layers[l].count; c++)
+                p[i * layers[l].count + c] = f->pixels[i * RB_OUT_FLOATS + layers[l].offset + c];
+        out[l] = (struct rb_io_layer){.name = layers[l].name,
+                                      .channel_count = layers[l].count,
+                                      .channel_names = layers[l].channels,
+                                      .pixels = p};
+        p += n * layers[l].count;
+    }
+    struct rb_io_attr attrs[] = {
+        {.name = "raybundle:version", .type = RB_IO_ATTR_STRING, .s = RB_VERSION},
+        {.name = "raybundle:integrator",
+         .type = RB_IO_ATTR_STRING,
+         .s = rb_integrator_name(r->job->integrator.name)},
+        {.name = "raybundle:jobHash", .type = RB_IO_ATTR_STRING, .s = r->hash},
+        {.name = "raybundle:frame", .type = RB_IO_ATTR_INT, .i = f->frame},
+        {.name = "raybundle:time", .type = RB_IO_ATTR_FLOAT, .f = (float)f->time_s},
+        {.name = "raybundle:defaultLight",
+         .type = RB_IO_ATTR_STRING,
+         .s = r->setup->default_light_note},
+        {.name = "worldToCamera", .type = RB_IO_ATTR_M44},
+        {.name = "worldToNDC", .type = RB_IO_ATTR_M44},
+        {.name = "raybundle:spp", .type = RB_IO_ATTR_INT, .i = (int)f->spp},
+    };
+    size_t attr_count = sizeof(attrs) / sizeof(attrs[0]) - (f->spp ? 0 : 1);
+    /* Our matrices are column-major for column vectors, which is exactly Imath's row-major
+     * layout for row vectors: the floats go over unchanged. */
+    memcpy(attrs[6].m, f->world_to_camera.m, sizeof(attrs[6].m));
+    memcpy(attrs[7].m, f->world_to_ndc.m, sizeof(attrs[7].m));
+    return rb_io_exr_write(path, f->width_px, f->height_px, out, LAYER_COUNT, attrs, attr_count,
+                           err);
+}
+
+static enum rb_status write_preview(const struct rb_render *r, const char *exr_path,
+                                    const struct rb_frame_result *f, struct rb_err *err)
+{
+    char path[4096];
+    enum rb_status st = rb_io_sidecar_path(exr_path, ".png", path, sizeof(path), err);
+    if (st)
+        return st;
+    /* Opaque: the beauty's colour already holds the environment where alpha is 0, and a
+     * preview shows what the camera sees. */
+    size_t n = (size_t)f->width_px * f->height_px;
+    for (size_t i = 0; i < n; i++) {
+        for (int c = 0; c < 3; c++)
+            r->scratch[i * 4 + c] = f->pixels[i * RB_OUT_FLOATS + RB_OUT_BEAUTY + c];
+        r->scratch[i * 4 + 3] = 1.0f;
+    }
+    const struct rb_job *job = r->job;
+    struct rb_io_color_desc cd = {job->color.config, job->color.display, job->color.view};
+    return rb_io_preview_write(path, f->width_px, f->height_px, r->scratch, &cd, err);
+}
+
+static enum rb_status write_timing(const struct rb_render *r, const char *exr_path,
+                                   const struct rb_frame_result *f, double wall_ms,
+                                   struct rb_err *err)
+{
+    char path[4096];
+    enum rb_status st = rb_io_sidecar_path(exr_path, ".timing.json", path, sizeof(path), err);
+    if (st)
+        return st;
+    struct rb_io_timing t = {
+        .frame = f->frame,
+        .time_s = f->time_s,
+        .passes = f->passes,
+        .pass_count = f->pass_count,
+        .wall_ms = wall_ms,
+        .device = r->device,
+        .driver = r->driver,
+        .integrator = rb_integrator_name(r->job->integrator.name),
+        .width_px = f->width_px,
+        .height_px = f->height_px,
+        .spp = f->spp,
+        .ray_count = f->ray_count,
+        .nonfinite_count = f->nonfinite_count,
+    };
+    return rb_io_timing_write(path, &t, err);
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+/* The reference's result as the common frame result. */
+static enum rb_status render_reference(struct rb_render *r, int frame, struct rb_frame_result *out,
+                                       struct rb_err *err)
+{
+    struct rb_reference_result ref;
+    enum rb_status st = rb_reference_render(r->ref, frame, &ref, err);
+    if (st)
+        return st;
+    r->trace = (struct rb_pass_time){.name = "trace", .cpu_ms = ref.render_s * 1e3, .count = 1};
+    *out = (struct rb_frame_result){.frame = ref.frame,
+                                    .time_s = ref.time_s,
+                                    .width_px = ref.width_px,
+                                    .height_px = ref.height_px,
+                                    .pixels = ref.pixels,
+                                    .passes = &r->trace,
+                                    .pass_count = 1,
+                                    .world_to_camera = ref.world_to_camera,
+                                    .world_to_ndc = ref.world_to_ndc,
+                                    .spp = ref.spp,
+                                    .ray_count = ref.ray_count,
+                                    .nonfinite_count = ref.nonfinite_count};
+    return RB_OK;
+}
+
+enum rb_status rb_render_frame(struct rb_render *r, int frame, const char *path,
+                               struct rb_render_frame_info *info, struct rb_err *err)
+{
+    double t0 = now_s();
+    struct rb_frame_result f;
+    r->was_stopped = false;
+    enum rb_status st =
+        r->ref ? render_reference(r, frame, &f, err) : rb_integrator_render(r->it, frame, &f, err);
+    if (st)
+        return st;
+    *info = (struct rb_render_frame_info){.is_partial = r->was_stopped &&
+                                                        f.spp < r->job->integrator.reference.spp,
+                                          .spp = f.spp,
+                                          .nonfinite_count = f.nonfinite_count};
+    if (info->is_partial)
+        return RB_OK; /* never under the frame's name: --resume renders it again */
+    if ((st = rb_io_make_parent_dirs(path, err)) || (st = write_exr(r, path, &f, err)) ||
+        (r->job->color.preview && (st = write_preview(r, path, &f, err))))
+        return st;
+    info->wall_ms = (now_s() - t0) * 1e3;
+    return write_timing(r, path, &f, info->wall_ms, err);
+}
+
+/* ---- space, environment -----------------------------------------------------------------------
+ */
+
+static uint64_t file_size(const char *path)
+{
+    struct stat sb;
+    return stat(path, &sb) == 0 ? (uint64_t)sb.st_size : 0;
+}
+
+enum rb_status rb_render_check_space(const char *path, bool has_preview, int frames_left,
+                                     struct rb_err *err)
+{
+    char side[4096];
+    uint64_t frame = file_size(path);
+    if (rb_io_sidecar_path(path, ".timing.json", side, sizeof(side), NULL) == RB_OK)
+        frame += file_size(side);
+    if (has_preview && rb_io_sidecar_path(path, ".png", side, sizeof(side), NULL) == RB_OK)
+        frame += file_size(side);
+    uint64_t need = frame * (uint64_t)frames_left, have = rb_io_free_bytes(path);
+    if (have == UINT64_MAX || need + need / 20 <= have)
+        return RB_OK;
+    return rb_errf(err, RB_E_IO,
+                   "the %d frames left need about %.1f GB at %.0f KB a frame, and the output's "
+                   "file system has %.1f GB free",
+                   frames_left, need / 1e9, frame / 1e3, have / 1e9);
+}
+
+enum rb_status rb_render_load_env(const char *path, float **out, uint32_t *width_px,
+                                  uint32_t *height_px, struct rb_err *err)
+{
+    struct rb_io_image img = {0};
+    enum rb_status st = rb_io_image_read(path, &img, err);
+    if (st) {
+        rb_err_prefix(err, "environment map");
+        return st;
+    }
+    size_t n = (size_t)img.width_px * img.height_px;
+    float *px = malloc(n * 4 * sizeof(float));
+    if (!px) {
+        rb_io_image_release(&img);
+        return rb_errf(err, RB_E_NOMEM, "out of memory for environment map '%s'", path);
+    }
+    for (size_t i = 0; i < n; i++)
+        for (uint32_t c = 0; c < 4; c++) {
+            const float *s = &img.pixels[i * img.channel_count];
+            px[i * 4 + c] =
+                c == 3 ? (img.channel_count >= 4 ? s[3] : 1.0f) : s[c < img.channel_count ? c : 0];
+        }
+    *out = px;
+    *width_px = img.width_px;
+    *height_px = img.height_px;
+    rb_io_image_release(&img);
+    return RB_OK;
+}

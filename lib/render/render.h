@@ -1,0 +1,77 @@
+/* A run of a job, as `raybundle render` and `raybundle reference` make it: the renderer behind it
+ * (the GPU frame driver or the CPU reference, one result type for both), the decision --resume
+ * makes for a frame, and the writing of a frame's files (the EXR with its layers and metadata,
+ * the timing sidecar, the preview), each to a temporary name and renamed. The command parses
+ * options, reports progress and chooses exit codes; this module does the work. */
+#ifndef RB_RENDER_RENDER_H
+#define RB_RENDER_RENDER_H
+
+#include "core/core.h"
+#include "job/job.h"
+#include "scene/scene.h"
+
+struct rb_render;
+
+struct rb_render_desc {
+    const struct rb_job *job;           /* borrowed; must outlive the run */
+    const struct rb_scene *scene;       /* borrowed */
+    const struct rb_scene_setup *setup; /* borrowed */
+    const float *env_rgba;              /* borrowed; rb_render_load_env's, or NULL */
+    uint32_t env_width_px, env_height_px;
+    const char *device;    /* GPU: a device name substring or index; NULL: lavapipe */
+    bool validate;         /* GPU: the Khronos validation layer; any message fails */
+    uint32_t thread_count; /* reference: worker threads; 0: every core */
+    /* reference: called after each pass of samples; returning false stops the frame, which is
+     * then partial and not written. May be NULL. */
+    bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
+    void *user;
+};
+
+/* Creates the renderer the job's integrator names. RB_E_NODEVICE without a usable device,
+ * RB_E_UNSUPPORTED for an integrator that does not exist yet, RB_E_INVALID for a job the
+ * renderer cannot take; *out only on success. */
+enum rb_status rb_render_create(const struct rb_render_desc *desc, struct rb_render **out,
+                                struct rb_err *err);
+void rb_render_destroy(struct rb_render *r);
+
+/* The device and driver the frames are rendered with, for the sidecar and messages. */
+const char *rb_render_device(const struct rb_render *r);
+const char *rb_render_driver(const struct rb_render *r);
+
+/* The last frame of the job's range: frames.end, or the end of the selected animation. */
+int rb_render_last_frame(const struct rb_job *job, const struct rb_scene *scene);
+
+/* What --resume does with frame f. */
+enum rb_render_verdict {
+    RB_RENDER_NEW = 0, /* no complete frame there: render it */
+    RB_RENDER_KEEP,    /* complete, with its sidecar, rendered by this very job: keep it */
+    RB_RENDER_STALE,   /* complete, but another job's (setting, scene contents, environment) */
+};
+/* Decides for the frame at path (the EXR; its timing sidecar beside it). */
+enum rb_render_verdict rb_render_resume_verdict(const struct rb_render *r, const char *path);
+
+/* What rendering a frame did. */
+struct rb_render_frame_info {
+    bool is_partial; /* the reference was stopped (on_pass returned false): nothing written */
+    uint32_t spp;    /* the reference's samples reached; 0 for the GPU */
+    uint32_t nonfinite_count;
+    double wall_ms;
+};
+
+/* Renders frame f and writes path (EXR), its timing sidecar and, when the job asks for
+ * previews, its PNG. A partial frame is not written. Fails with the renderer's or the writer's
+ * status; a file is either complete or absent. */
+enum rb_status rb_render_frame(struct rb_render *r, int frame, const char *path,
+                               struct rb_render_frame_info *info, struct rb_err *err);
+
+/* After the first frame written at path: RB_E_IO when frames_left more frames of that size
+ * (EXR, sidecar, preview) would not fit on the output's file system, with 5% to spare. */
+enum rb_status rb_render_check_space(const char *path, bool has_preview, int frames_left,
+                                     struct rb_err *err);
+
+/* Loads an environment map as RGBA floats (RGB gets A = 1; one channel is grey), freed with
+ * free(). Fails with the image reader's status, the path named. */
+enum rb_status rb_render_load_env(const char *path, float **out, uint32_t *width_px,
+                                  uint32_t *height_px, struct rb_err *err);
+
+#endif

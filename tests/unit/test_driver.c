@@ -1,0 +1,248 @@
+/* The frame driver (lib/integrators/driver.c) with integrators of the test's own: the history
+ * contract (a chunk equals the same frames of a whole run, warm-up frames included, for history
+ * 1 and 3), pass groups (200 recordings of one pass are one timing entry with count 200), and
+ * the direct integrator's chunk identity. On lavapipe, validation on. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "integrators/integrators_int.h"
+
+#define SLOTS_MAX 8
+
+/* A test integrator whose output is the list of frames its slots hold: frame f stamps f into
+ * slot f mod n of a tag buffer (also as a warm-up), then copies the tags into the readback. The
+ * output of frame f is thus a function of f and its history_frames predecessors, and a missing
+ * or wrong warm-up shows as a tag that differs from the whole run's. */
+struct tags {
+    struct rb_gpu_buffer buffer; /* SLOTS_MAX uint32 */
+    uint32_t repeat;             /* extra recordings of the "repeat" pass */
+};
+
+static uint32_t tags_history = 3, tags_repeat = 0;
+
+static uint32_t history_tags(const struct rb_job *job)
+{
+    (void)job;
+    return tags_history;
+}
+
+static enum rb_status create_tags(struct rb_integrator *it, void **state, struct rb_err *err)
+{
+    struct tags *t = calloc(1, sizeof(*t));
+    if (!t)
+        return rb_errf(err, RB_E_NOMEM, "out of memory");
+    t->repeat = tags_repeat;
+    enum rb_status st =
+        rb_gpu_buffer_init(it->gpu,
+                           &(struct rb_gpu_buffer_desc){.size_bytes = SLOTS_MAX * 4,
+                                                        .usage = VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
+                                                                 VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                                        .debug_name = "tags"},
+                           &t->buffer, err);
+    if (st == RB_OK) {
+        VkCommandBuffer cmd;
+        if ((st = rb_gpu_oneshot_begin(it->gpu, &cmd, err)) == RB_OK) {
+            vkCmdFillBuffer(cmd, t->buffer.buffer, 0, VK_WHOLE_SIZE, 0xffffffffu);
+            st = rb_gpu_oneshot_end(it->gpu, cmd, err);
+        }
+    }
+    if (st) {
+        rb_gpu_buffer_release(it->gpu, &t->buffer);
+        free(t);
+        return st;
+    }
+    *state = t;
+    return RB_OK;
+}
+
+static void record_tags(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
+                        const struct rb_frame_ctx *ctx)
+{
+    struct tags *t = state;
+    uint32_t n = it->frame.slot_count;
+    uint32_t slot = (uint32_t)(((int64_t)ctx->frame % n + n) % n);
+    rb_integrator_pass_begin(it, cmd, "stamp");
+    vkCmdFillBuffer(cmd, t->buffer.buffer, 4 * slot, 4, (uint32_t)ctx->frame);
+    rb_integrator_pass_end(it, cmd);
+    for (uint32_t i = 0; i < t->repeat; i++) {
+        rb_integrator_pass_begin(it, cmd, "repeat");
+        vkCmdFillBuffer(cmd, t->buffer.buffer, 4 * (SLOTS_MAX - 1), 4, i);
+        rb_integrator_pass_end(it, cmd);
+    }
+    if (ctx->is_warmup)
+        return;
+    rb_integrator_pass_begin(it, cmd, "copy");
+    vkCmdCopyBuffer(cmd, t->buffer.buffer, it->frame.readback.buffer, 1,
+                    &(VkBufferCopy){0, 0, 4 * n});
+    rb_integrator_pass_end(it, cmd);
+}
+
+static void destroy_tags(struct rb_integrator *it, void *state)
+{
+    struct tags *t = state;
+    rb_gpu_buffer_release(it->gpu, &t->buffer);
+    free(t);
+}
+
+static const struct rb_integrator_ops tags_ops = {
+    .name = "tags",
+    .history_frames = history_tags,
+    .create = create_tags,
+    .record = record_tags,
+    .destroy = destroy_tags,
+};
+
+struct fixture {
+    struct rb_gpu *gpu;
+    struct rb_job *job;
+    struct rb_scene *scene;
+};
+
+static int setup(void **state)
+{
+    static struct fixture f;
+    struct rb_err err = RB_ERR_INIT;
+    struct rb_job_override o[] = {{"resolution", "[32, 18]", NULL},
+                                  {"integrator.direct.shadow_size", "64", NULL}};
+    if (rb_gpu_create(&(struct rb_gpu_desc){.validate = true}, &f.gpu, &err) ||
+        rb_job_load("jobs/demo.yaml", o, 2, &f.job, &err) ||
+        rb_scene_load(f.job->scene_path, 0, &f.scene, &err)) {
+        fprintf(stderr, "setup: %s\n", err.msg);
+        return -1;
+    }
+    *state = &f;
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    struct fixture *f = *state;
+    rb_scene_destroy(f->scene);
+    rb_job_destroy(f->job);
+    rb_gpu_destroy(f->gpu);
+    return 0;
+}
+
+static struct rb_integrator *make(struct fixture *f, const struct rb_integrator_ops *ops,
+                                  uint32_t history)
+{
+    struct rb_integrator *it = NULL;
+    struct rb_err err = RB_ERR_INIT;
+    struct rb_integrator_desc d = {
+        .job = f->job, .scene = f->scene, .gpu = f->gpu, .history_frames = history};
+    if (rb_integrator_create_with(&d, ops, &it, &err))
+        fail_msg("create: %s", err.msg);
+    return it;
+}
+
+/* Renders frames a..b and keeps each frame's first `bytes` of readback, `stride` apart. */
+static void render_range(struct rb_integrator *it, int a, int b, size_t bytes, size_t stride,
+                         uint8_t *out)
+{
+    struct rb_err err = RB_ERR_INIT;
+    for (int f = a; f <= b; f++) {
+        struct rb_frame_result r;
+        if (rb_integrator_render(it, f, &r, &err))
+            fail_msg("frame %d: %s", f, err.msg);
+        memcpy(out + (size_t)(f - a) * stride, r.pixels, bytes);
+    }
+}
+
+static void test_history_contract(void **state)
+{
+    struct fixture *f = *state;
+    for (uint32_t h = 1; h <= 3; h += 2) {
+        tags_history = h;
+        tags_repeat = 0;
+        uint32_t n = h + 1;
+        uint32_t whole[8][SLOTS_MAX], chunk[3][SLOTS_MAX];
+        struct rb_integrator *it = make(f, &tags_ops, 0);
+        assert_int_equal(rb_integrator_history_frames(it), h);
+        assert_int_equal(it->frame.slot_count, n);
+        render_range(it, 0, 7, 4 * n, sizeof(whole[0]), (uint8_t *)whole);
+        rb_integrator_destroy(it);
+        /* The whole run's frame 7 holds frames 7..7-h, one a slot. */
+        for (uint32_t s = 0; s < n; s++)
+            assert_int_equal(whole[7][s] % n, s);
+        for (uint32_t k = 0; k < n; k++) {
+            uint32_t want = 7 - k, s = want % n;
+            assert_int_equal(whole[7][s], want);
+        }
+        it = make(f, &tags_ops, 0);
+        render_range(it, 5, 7, 4 * n, sizeof(chunk[0]), (uint8_t *)chunk);
+        rb_integrator_destroy(it);
+        for (int k = 0; k < 3; k++)
+            assert_memory_equal(chunk[k], whole[5 + k], 4 * n);
+        /* A jump back is a chunk of its own: warm-up again, same bits. */
+        it = make(f, &tags_ops, 0);
+        render_range(it, 6, 6, 4 * n, sizeof(chunk[0]), (uint8_t *)chunk);
+        render_range(it, 5, 5, 4 * n, sizeof(chunk[0]), (uint8_t *)chunk[1]);
+        rb_integrator_destroy(it);
+        assert_memory_equal(chunk[0], whole[6], 4 * n);
+        assert_memory_equal(chunk[1], whole[5], 4 * n);
+    }
+}
+
+static void test_pass_groups(void **state)
+{
+    struct fixture *f = *state;
+    tags_history = 1;
+    tags_repeat = 200;
+    struct rb_integrator *it = make(f, &tags_ops, 0);
+    struct rb_frame_result r;
+    struct rb_err err = RB_ERR_INIT;
+    if (rb_integrator_render(it, 0, &r, &err))
+        fail_msg("%s", err.msg);
+    assert_int_equal(r.pass_count, 3);
+    assert_string_equal(r.passes[0].name, "stamp");
+    assert_int_equal(r.passes[0].count, 1);
+    assert_string_equal(r.passes[1].name, "repeat");
+    assert_int_equal(r.passes[1].count, 200);
+    assert_true(r.passes[1].gpu_ms >= 0.0);
+    assert_string_equal(r.passes[2].name, "copy");
+    assert_int_equal(r.passes[2].count, 1);
+    assert_int_equal(f->gpu->pass_count, 202); /* more than one query pool's worth */
+    rb_integrator_destroy(it);
+    tags_repeat = 0;
+}
+
+/* The direct integrator keeps the contract with its own history (1) and a longer one (3). */
+static void test_direct_chunks(void **state)
+{
+    struct fixture *f = *state;
+    size_t bytes = (size_t)32 * 18 * RB_OUT_FLOATS * sizeof(float);
+    uint8_t *whole = malloc(8 * bytes), *chunk = malloc(3 * bytes);
+    assert_non_null(whole);
+    assert_non_null(chunk);
+    for (uint32_t h = 0; h <= 3; h += 3) {
+        struct rb_integrator *it = make(f, &rb_integrator_direct, h);
+        assert_int_equal(rb_integrator_history_frames(it), h ? h : 1);
+        render_range(it, 0, 7, bytes, bytes, whole);
+        rb_integrator_destroy(it);
+        it = make(f, &rb_integrator_direct, h);
+        render_range(it, 5, 7, bytes, bytes, chunk);
+        rb_integrator_destroy(it);
+        for (int k = 0; k < 3; k++)
+            assert_memory_equal(chunk + k * bytes, whole + (5 + k) * bytes, bytes);
+        assert_true(memcmp(whole, whole + 4 * bytes, bytes) != 0); /* the demo moves */
+    }
+    free(whole);
+    free(chunk);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_history_contract),
+        cmocka_unit_test(test_pass_groups),
+        cmocka_unit_test(test_direct_chunks),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
