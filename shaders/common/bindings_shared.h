@@ -63,4 +63,9 @@
 #define RB_BIND_LIGHT_TABLE_OUT 4
 #define RB_BIND_LIGHT_TABLE_COUNT 5
 
+/* many_bindings.comp (tests/unit/test_gpu.c): more bindings than the binding list once held */
+#define RB_BIND_MANY_BINDINGS_IN 0 /* to 18: RB_BIND_MANY_BINDINGS_IN + i for input i */
+#define RB_BIND_MANY_BINDINGS_OUT 19
+#define RB_BIND_MANY_BINDINGS_COUNT 20
+
 #endif
