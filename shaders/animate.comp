@@ -2,16 +2,17 @@
 // writing world-space vertices for the raster passes. One dispatch per instance.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#include "bindings_shared.h"
 #include "shared.h"
 
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 0) readonly buffer Src { float src[]; };
-layout(std430, binding = 1) readonly buffer Morph { float morph[]; };
-layout(std430, binding = 2) readonly buffer Instances { rb_gpu_instance instances[]; };
-layout(std430, binding = 3) readonly buffer Joints { mat4 joints[]; };
-layout(std430, binding = 4) readonly buffer Weights { float weights[]; };
-layout(std430, binding = 5) writeonly buffer Out { rb_gpu_vertex verts[]; };
+layout(std430, binding = RB_BIND_ANIMATE_SRC_VERTICES) readonly buffer Src { float src[]; };
+layout(std430, binding = RB_BIND_ANIMATE_MORPH_DELTAS) readonly buffer Morph { float morph[]; };
+layout(std430, binding = RB_BIND_ANIMATE_INSTANCES) readonly buffer Instances { rb_gpu_instance instances[]; };
+layout(std430, binding = RB_BIND_ANIMATE_JOINTS) readonly buffer Joints { mat4 joints[]; };
+layout(std430, binding = RB_BIND_ANIMATE_WEIGHTS) readonly buffer Weights { float weights[]; };
+layout(std430, binding = RB_BIND_ANIMATE_VERTICES) writeonly buffer Out { rb_gpu_vertex verts[]; };
 
 layout(push_constant) uniform Push { uint instance; } pc;
 

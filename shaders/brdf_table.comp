@@ -2,14 +2,15 @@
 // hold the shaders' BRDF to the CPU reference's (tests/unit/test_brdf_parity.c). Not a pass.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#include "bindings_shared.h"
 #include "brdf.glsl"
 
 layout(local_size_x = 64) in;
 
 // Per entry, 16 floats: n.xyz, roughness; v.xyz, f90; l.xyz, unused; c_diff.rgb, unused;
 // then f0.rgb in a second array with the same index.
-layout(std430, binding = 0) readonly buffer In { vec4 inputs[]; };
-layout(std430, binding = 1) writeonly buffer Out { vec4 outputs[]; };
+layout(std430, binding = RB_BIND_BRDF_TABLE_IN) readonly buffer In { vec4 inputs[]; };
+layout(std430, binding = RB_BIND_BRDF_TABLE_OUT) writeonly buffer Out { vec4 outputs[]; };
 layout(push_constant) uniform Push { uint count; } pc;
 
 void main()

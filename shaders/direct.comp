@@ -2,6 +2,7 @@
 // pixel; the environment where no geometry is.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#include "bindings_shared.h"
 #include "shared.h"
 #include "brdf.glsl"
 #include "encode.glsl"
@@ -9,18 +10,18 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(std140, binding = 0) uniform Globals { rb_gpu_globals g; };
-layout(binding = 1, rgba32f) uniform readonly image2D gb_position;
-layout(binding = 2, rgba32f) uniform readonly image2D gb_normal;
-layout(binding = 3, rgba32f) uniform readonly image2D gb_albedo;
-layout(binding = 4, rgba32f) uniform readonly image2D gb_specular;
-layout(binding = 5, rgba32f) uniform readonly image2D gb_emission;
-layout(binding = 6, rgba32f) uniform readonly image2D gb_motion;
-layout(std430, binding = 7) readonly buffer Lights { rb_gpu_light lights[]; };
-layout(std430, binding = 8) readonly buffer Views { rb_gpu_shadow_view views[]; };
-layout(binding = 9) uniform sampler2DArray shadow_maps;
-layout(binding = 10) uniform sampler2D env_map;
-layout(binding = 11, rgba32f) uniform writeonly image2D o_direct;
+layout(std140, binding = RB_BIND_DIRECT_GLOBALS) uniform Globals { rb_gpu_globals g; };
+layout(binding = RB_BIND_DIRECT_GB_POSITION, rgba32f) uniform readonly image2D gb_position;
+layout(binding = RB_BIND_DIRECT_GB_NORMAL, rgba32f) uniform readonly image2D gb_normal;
+layout(binding = RB_BIND_DIRECT_GB_ALBEDO, rgba32f) uniform readonly image2D gb_albedo;
+layout(binding = RB_BIND_DIRECT_GB_SPECULAR, rgba32f) uniform readonly image2D gb_specular;
+layout(binding = RB_BIND_DIRECT_GB_EMISSION, rgba32f) uniform readonly image2D gb_emission;
+layout(binding = RB_BIND_DIRECT_GB_MOTION, rgba32f) uniform readonly image2D gb_motion;
+layout(std430, binding = RB_BIND_DIRECT_LIGHTS) readonly buffer Lights { rb_gpu_light lights[]; };
+layout(std430, binding = RB_BIND_DIRECT_SHADOW_VIEWS) readonly buffer Views { rb_gpu_shadow_view views[]; };
+layout(binding = RB_BIND_DIRECT_SHADOW_MAPS) uniform sampler2DArray shadow_maps;
+layout(binding = RB_BIND_DIRECT_ENV_MAP) uniform sampler2D env_map;
+layout(binding = RB_BIND_DIRECT_OUT, rgba32f) uniform writeonly image2D o_direct;
 
 // Fraction of 16 taps (a 4x4 grid spanning the PCF radius) that see the light. The lookup point
 // is pushed off the surface along the geometric normal by the filter's footprint (normal-offset

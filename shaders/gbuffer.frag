@@ -3,13 +3,14 @@
 // vector and geometric normal.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#include "bindings_shared.h"
 #include "shared.h"
 #include "encode.glsl"
 
-layout(std140, binding = 0) uniform Globals { rb_gpu_globals g; };
-layout(std430, binding = 3) readonly buffer Materials { rb_gpu_material materials[]; };
-layout(binding = 4) uniform sampler2DArray srgb_textures;
-layout(binding = 5) uniform sampler2DArray linear_textures;
+layout(std140, binding = RB_BIND_GBUFFER_GLOBALS) uniform Globals { rb_gpu_globals g; };
+layout(std430, binding = RB_BIND_GBUFFER_MATERIALS) readonly buffer Materials { rb_gpu_material materials[]; };
+layout(binding = RB_BIND_GBUFFER_SRGB_TEXTURES) uniform sampler2DArray srgb_textures;
+layout(binding = RB_BIND_GBUFFER_LINEAR_TEXTURES) uniform sampler2DArray linear_textures;
 
 layout(location = 0) in vec3 i_pos;
 layout(location = 1) in vec3 i_normal;

@@ -2,11 +2,12 @@
 // position for motion vectors.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#include "bindings_shared.h"
 #include "shared.h"
 
-layout(std140, binding = 0) uniform Globals { rb_gpu_globals g; };
-layout(std430, binding = 1) readonly buffer Verts { rb_gpu_vertex verts[]; };
-layout(std430, binding = 2) readonly buffer Prev { rb_gpu_vertex prev[]; };
+layout(std140, binding = RB_BIND_GBUFFER_GLOBALS) uniform Globals { rb_gpu_globals g; };
+layout(std430, binding = RB_BIND_GBUFFER_VERTICES) readonly buffer Verts { rb_gpu_vertex verts[]; };
+layout(std430, binding = RB_BIND_GBUFFER_PREV_VERTICES) readonly buffer Prev { rb_gpu_vertex prev[]; };
 
 layout(location = 0) out vec3 o_pos;
 layout(location = 1) out vec3 o_normal;

@@ -3,6 +3,7 @@
 // reference's (tests/unit/test_light_parity.c). Not a pass.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#include "bindings_shared.h"
 #include "shared.h"
 #include "brdf.glsl"
 #include "lights.glsl"
@@ -11,13 +12,13 @@ layout(local_size_x = 64) in;
 
 // Entry i of the first part: light i lighting point i. Of the second part: the environment map
 // seen along a direction, with a rotation (radians) and an intensity.
-layout(std430, binding = 0) readonly buffer Lights { rb_gpu_light lights[]; };
-layout(std430, binding = 1) readonly buffer Points { vec4 points[]; };  // xyz
-layout(std430, binding = 2) readonly buffer Dirs { vec4 dirs[]; };      // xyz, rotation
-layout(binding = 3) uniform sampler2D env_map;
+layout(std430, binding = RB_BIND_LIGHT_TABLE_LIGHTS) readonly buffer Lights { rb_gpu_light lights[]; };
+layout(std430, binding = RB_BIND_LIGHT_TABLE_POINTS) readonly buffer Points { vec4 points[]; };  // xyz
+layout(std430, binding = RB_BIND_LIGHT_TABLE_DIRS) readonly buffer Dirs { vec4 dirs[]; };      // xyz, rotation
+layout(binding = RB_BIND_LIGHT_TABLE_ENV_MAP) uniform sampler2D env_map;
 // Two vec4 per entry. A light: l.xyz, attenuation; falloff, spot factor, distance, unused. Then
 // the environment: rgb, unused; the map coordinates u, v, unused, unused.
-layout(std430, binding = 4) writeonly buffer Out { vec4 outputs[]; };
+layout(std430, binding = RB_BIND_LIGHT_TABLE_OUT) writeonly buffer Out { vec4 outputs[]; };
 layout(push_constant) uniform Push { uint light_count, env_count; float env_intensity; } pc;
 
 void main()

@@ -4,19 +4,20 @@
 // counted in `nonfinite` (an integer atomic add, so the count does not depend on the order).
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#include "bindings_shared.h"
 #include "shared.h"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(std140, binding = 0) uniform Globals { rb_gpu_globals g; };
-layout(binding = 1, rgba32f) uniform readonly image2D beauty;
-layout(binding = 2, rgba32f) uniform readonly image2D direct;
-layout(binding = 3, rgba32f) uniform readonly image2D gb_albedo;
-layout(binding = 4, rgba32f) uniform readonly image2D gb_normal;
-layout(binding = 5, rgba32f) uniform readonly image2D gb_position;
-layout(binding = 6, rgba32f) uniform readonly image2D gb_motion;
-layout(std430, binding = 7) writeonly buffer Out { float o[]; };
-layout(std430, binding = 8) buffer Nonfinite { uint nonfinite; };
+layout(std140, binding = RB_BIND_OUTPUT_GLOBALS) uniform Globals { rb_gpu_globals g; };
+layout(binding = RB_BIND_OUTPUT_BEAUTY, rgba32f) uniform readonly image2D beauty;
+layout(binding = RB_BIND_OUTPUT_DIRECT, rgba32f) uniform readonly image2D direct;
+layout(binding = RB_BIND_OUTPUT_ALBEDO, rgba32f) uniform readonly image2D gb_albedo;
+layout(binding = RB_BIND_OUTPUT_NORMAL, rgba32f) uniform readonly image2D gb_normal;
+layout(binding = RB_BIND_OUTPUT_POSITION, rgba32f) uniform readonly image2D gb_position;
+layout(binding = RB_BIND_OUTPUT_MOTION, rgba32f) uniform readonly image2D gb_motion;
+layout(std430, binding = RB_BIND_OUTPUT_READBACK) writeonly buffer Out { float o[]; };
+layout(std430, binding = RB_BIND_OUTPUT_NONFINITE) buffer Nonfinite { uint nonfinite; };
 
 uint bad = 0u;
 

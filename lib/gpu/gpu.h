@@ -168,16 +168,32 @@ void rb_gpu_queries_release(struct rb_gpu *gpu);
 
 /* ---- pipelines ----------------------------------------------------------------------------- */
 
+/* The most bindings a push-descriptor set holds here: the maxPushDescriptors every Vulkan device
+ * with VK_KHR_push_descriptor guarantees (lavapipe's exactly). A layout with more is refused at
+ * create time; the binding list below is sized by it and checked against it. */
+#define RB_GPU_MAX_BINDINGS 32
+
 /* A push-descriptor set layout and pipeline layout from a list of bindings (binding i gets
  * types[i]) and a push-constant size, visible to all stages. */
 struct rb_gpu_layout {
     VkDescriptorSetLayout set_layout;
     VkPipelineLayout pipeline_layout;
+    VkDescriptorType types[RB_GPU_MAX_BINDINGS]; /* binding i's type */
+    uint32_t binding_count;
 };
+/* Fails with RB_E_UNSUPPORTED, before creating anything, when the bindings exceed the device's
+ * limits (see rb_gpu_layout_check). */
 enum rb_status rb_gpu_layout_init(struct rb_gpu *gpu, const VkDescriptorType *types, uint32_t count,
                                   uint32_t push_bytes, struct rb_gpu_layout *out,
                                   struct rb_err *err);
 void rb_gpu_layout_release(struct rb_gpu *gpu, struct rb_gpu_layout *layout);
+/* Checks one push-descriptor set of these bindings, visible to every stage, against a device's
+ * limits (maxPushDescriptors, the maxPerStageDescriptor* counts, maxPerStageResources) and
+ * RB_GPU_MAX_BINDINGS: RB_E_UNSUPPORTED with a message naming the limit and both numbers. Pure,
+ * so tests can pass made-up limits. */
+enum rb_status rb_gpu_layout_check(const VkPhysicalDeviceLimits *limits,
+                                   uint32_t max_push_descriptors, const VkDescriptorType *types,
+                                   uint32_t count, struct rb_err *err);
 
 enum rb_status rb_gpu_compute_pipeline(struct rb_gpu *gpu, const uint32_t *spv, size_t spv_bytes,
                                        VkPipelineLayout layout, const char *debug_name,
@@ -199,17 +215,26 @@ struct rb_gpu_graphics_desc {
 enum rb_status rb_gpu_graphics_pipeline(struct rb_gpu *gpu, const struct rb_gpu_graphics_desc *d,
                                         VkPipeline *out, struct rb_err *err);
 
-/* Push-descriptor writes, built up by a pass at record time. */
+/* Push-descriptor writes, built up by a pass at record time: writes[i] is binding i. Start from
+ * {0}. Setting a binding twice or one at or past RB_GPU_MAX_BINDINGS is a bug (RB_BUG). */
 struct rb_gpu_bindings {
-    VkWriteDescriptorSet writes[16];
-    VkDescriptorBufferInfo buffers[16];
-    VkDescriptorImageInfo images[16];
-    uint32_t count;
+    VkWriteDescriptorSet writes[RB_GPU_MAX_BINDINGS]; /* sType 0 while the binding is unset */
+    VkDescriptorBufferInfo buffers[RB_GPU_MAX_BINDINGS];
+    VkDescriptorImageInfo images[RB_GPU_MAX_BINDINGS];
+    uint32_t count; /* one past the highest binding set */
 };
+/* Sets the given binding, whatever the order of the calls. */
+void rb_gpu_bindings_set_buffer(struct rb_gpu_bindings *b, uint32_t binding, VkDescriptorType type,
+                                const struct rb_gpu_buffer *buf);
+void rb_gpu_bindings_set_image(struct rb_gpu_bindings *b, uint32_t binding, VkDescriptorType type,
+                               VkImageView view, VkSampler sampler, VkImageLayout layout);
+/* Set the next binding (b->count): the calls' order is the binding order. */
 void rb_gpu_bind_buffer(struct rb_gpu_bindings *b, VkDescriptorType type,
                         const struct rb_gpu_buffer *buf);
 void rb_gpu_bind_image(struct rb_gpu_bindings *b, VkDescriptorType type, VkImageView view,
                        VkSampler sampler, VkImageLayout layout);
+/* Pushes bindings 0 to b->count - 1 as set 0; a binding left unset below b->count is a bug
+ * (RB_BUG). */
 void rb_gpu_push_bindings(struct rb_gpu *gpu, VkCommandBuffer cmd, VkPipelineBindPoint point,
                           VkPipelineLayout layout, const struct rb_gpu_bindings *b);
 

@@ -16,21 +16,91 @@ static enum rb_status make_module(struct rb_gpu *gpu, const uint32_t *spv, size_
     return RB_OK;
 }
 
+enum rb_status rb_gpu_layout_check(const VkPhysicalDeviceLimits *limits,
+                                   uint32_t max_push_descriptors, const VkDescriptorType *types,
+                                   uint32_t count, struct rb_err *err)
+{
+    /* What counts against each per-stage limit, as the Vulkan spec's limits chapter says. Every
+     * binding is visible to all stages, so each stage sees the whole set. (Color attachments
+     * also count against maxPerStageResources in a fragment shader; no pass comes close.) */
+    uint32_t samplers = 0, uniform_buffers = 0, storage_buffers = 0, sampled_images = 0;
+    uint32_t storage_images = 0, input_attachments = 0, resources = 0;
+    for (uint32_t i = 0; i < count; i++) {
+        switch (types[i]) {
+        case VK_DESCRIPTOR_TYPE_SAMPLER: samplers++; break;
+        case VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER:
+            samplers++;
+            sampled_images++;
+            break;
+        case VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE:
+        case VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER: sampled_images++; break;
+        case VK_DESCRIPTOR_TYPE_STORAGE_IMAGE:
+        case VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER: storage_images++; break;
+        case VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER:
+        case VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC: uniform_buffers++; break;
+        case VK_DESCRIPTOR_TYPE_STORAGE_BUFFER:
+        case VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC: storage_buffers++; break;
+        case VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT: input_attachments++; break;
+        default:
+            return rb_errf(err, RB_E_UNSUPPORTED,
+                           "binding %u: descriptor type %d has no limit check here", i,
+                           (int)types[i]);
+        }
+        if (types[i] != VK_DESCRIPTOR_TYPE_SAMPLER) /* a sampler alone is not a resource */
+            resources++;
+    }
+    const struct {
+        const char *what, *limit;
+        uint32_t used, max;
+    } checks[] = {
+        {"bindings", "maxPushDescriptors", count, max_push_descriptors},
+        {"bindings", "RB_GPU_MAX_BINDINGS", count, RB_GPU_MAX_BINDINGS},
+        {"samplers", "maxPerStageDescriptorSamplers", samplers,
+         limits->maxPerStageDescriptorSamplers},
+        {"uniform buffers", "maxPerStageDescriptorUniformBuffers", uniform_buffers,
+         limits->maxPerStageDescriptorUniformBuffers},
+        {"storage buffers", "maxPerStageDescriptorStorageBuffers", storage_buffers,
+         limits->maxPerStageDescriptorStorageBuffers},
+        {"sampled images", "maxPerStageDescriptorSampledImages", sampled_images,
+         limits->maxPerStageDescriptorSampledImages},
+        {"storage images", "maxPerStageDescriptorStorageImages", storage_images,
+         limits->maxPerStageDescriptorStorageImages},
+        {"input attachments", "maxPerStageDescriptorInputAttachments", input_attachments,
+         limits->maxPerStageDescriptorInputAttachments},
+        {"resources", "maxPerStageResources", resources, limits->maxPerStageResources},
+    };
+    for (size_t i = 0; i < sizeof(checks) / sizeof(checks[0]); i++)
+        if (checks[i].used > checks[i].max)
+            return rb_errf(err, RB_E_UNSUPPORTED,
+                           "descriptor set layout has %u %s, more than %s (%u)", checks[i].used,
+                           checks[i].what, checks[i].limit, checks[i].max);
+    return RB_OK;
+}
+
 enum rb_status rb_gpu_layout_init(struct rb_gpu *gpu, const VkDescriptorType *types, uint32_t count,
                                   uint32_t push_bytes, struct rb_gpu_layout *out,
                                   struct rb_err *err)
 {
-    VkDescriptorSetLayoutBinding bindings[16];
-    if (count > 16)
-        RB_BUG("%u bindings", count);
-    for (uint32_t i = 0; i < count; i++)
+    VkPhysicalDevicePushDescriptorPropertiesKHR push_props = {
+        .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PUSH_DESCRIPTOR_PROPERTIES_KHR};
+    VkPhysicalDeviceProperties2 props = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2,
+                                         .pNext = &push_props};
+    vkGetPhysicalDeviceProperties2(gpu->phys, &props);
+    enum rb_status st = rb_gpu_layout_check(&props.properties.limits, push_props.maxPushDescriptors,
+                                            types, count, err);
+    if (st)
+        return st;
+    struct rb_gpu_layout l = {.binding_count = count};
+    VkDescriptorSetLayoutBinding bindings[RB_GPU_MAX_BINDINGS];
+    for (uint32_t i = 0; i < count; i++) {
+        l.types[i] = types[i];
         bindings[i] = (VkDescriptorSetLayoutBinding){
             .binding = i,
             .descriptorType = types[i],
             .descriptorCount = 1,
             .stageFlags = VK_SHADER_STAGE_ALL,
         };
-    struct rb_gpu_layout l = {0};
+    }
     VkDescriptorSetLayoutCreateInfo sci = {
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
         .flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR,
@@ -179,36 +249,57 @@ out:
     return st;
 }
 
-void rb_gpu_bind_buffer(struct rb_gpu_bindings *b, VkDescriptorType type,
-                        const struct rb_gpu_buffer *buf)
+/* Claims binding i of b for a write of the given type. */
+static VkWriteDescriptorSet *claim(struct rb_gpu_bindings *b, uint32_t i, VkDescriptorType type)
 {
-    uint32_t i = b->count++;
-    b->buffers[i] = (VkDescriptorBufferInfo){buf->buffer, 0, VK_WHOLE_SIZE};
+    if (i >= RB_GPU_MAX_BINDINGS)
+        RB_BUG("binding %u: a push-descriptor set holds at most %u", i, RB_GPU_MAX_BINDINGS);
+    if (b->writes[i].sType)
+        RB_BUG("binding %u set twice", i);
+    if (i >= b->count)
+        b->count = i + 1;
     b->writes[i] = (VkWriteDescriptorSet){
         .sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
         .dstBinding = i,
         .descriptorCount = 1,
         .descriptorType = type,
-        .pBufferInfo = &b->buffers[i],
     };
+    return &b->writes[i];
+}
+
+void rb_gpu_bindings_set_buffer(struct rb_gpu_bindings *b, uint32_t binding, VkDescriptorType type,
+                                const struct rb_gpu_buffer *buf)
+{
+    VkWriteDescriptorSet *w = claim(b, binding, type);
+    b->buffers[binding] = (VkDescriptorBufferInfo){buf->buffer, 0, VK_WHOLE_SIZE};
+    w->pBufferInfo = &b->buffers[binding];
+}
+
+void rb_gpu_bindings_set_image(struct rb_gpu_bindings *b, uint32_t binding, VkDescriptorType type,
+                               VkImageView view, VkSampler sampler, VkImageLayout layout)
+{
+    VkWriteDescriptorSet *w = claim(b, binding, type);
+    b->images[binding] = (VkDescriptorImageInfo){sampler, view, layout};
+    w->pImageInfo = &b->images[binding];
+}
+
+void rb_gpu_bind_buffer(struct rb_gpu_bindings *b, VkDescriptorType type,
+                        const struct rb_gpu_buffer *buf)
+{
+    rb_gpu_bindings_set_buffer(b, b->count, type, buf);
 }
 
 void rb_gpu_bind_image(struct rb_gpu_bindings *b, VkDescriptorType type, VkImageView view,
                        VkSampler sampler, VkImageLayout layout)
 {
-    uint32_t i = b->count++;
-    b->images[i] = (VkDescriptorImageInfo){sampler, view, layout};
-    b->writes[i] = (VkWriteDescriptorSet){
-        .sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
-        .dstBinding = i,
-        .descriptorCount = 1,
-        .descriptorType = type,
-        .pImageInfo = &b->images[i],
-    };
+    rb_gpu_bindings_set_image(b, b->count, type, view, sampler, layout);
 }
 
 void rb_gpu_push_bindings(struct rb_gpu *gpu, VkCommandBuffer cmd, VkPipelineBindPoint point,
                           VkPipelineLayout layout, const struct rb_gpu_bindings *b)
 {
+    for (uint32_t i = 0; i < b->count; i++)
+        if (!b->writes[i].sType)
+            RB_BUG("binding %u of %u never set", i, b->count);
     gpu->push_descriptor_set(cmd, point, layout, 0, b->count, b->writes);
 }

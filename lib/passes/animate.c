@@ -1,7 +1,7 @@
 /* animate: morph targets, skins and node transforms on the GPU (DESIGN.md "animate"). The CPU
  * evaluates the animation curves into per-instance matrices and weights; this pass deforms the
  * vertices, one dispatch per instance, into the slot's world-space vertex buffer. */
-#include "passes/passes.h"
+#include "passes/passes_int.h"
 
 #include <stdint.h>
 #include <stdlib.h>
@@ -9,16 +9,18 @@
 #include "animate.comp.h"
 
 struct rb_pass_animate {
-    struct rb_gpu *gpu;
-    struct rb_gpu_layout layout;
-    VkPipeline pipeline;
+    struct rb_pass pass;
 };
 
-static const VkDescriptorType bindings[] = {
-    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+static const struct rb_pass_binding bindings[] = {
+    RB_PASS_BIND(RB_BIND_ANIMATE_SRC_VERTICES, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_ANIMATE_MORPH_DELTAS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_ANIMATE_INSTANCES, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_ANIMATE_JOINTS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_ANIMATE_WEIGHTS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_ANIMATE_VERTICES, STORAGE_BUFFER),
 };
+_Static_assert(COUNT(bindings) == RB_BIND_ANIMATE_COUNT, "animate bindings");
 
 enum rb_status rb_pass_animate_create(struct rb_gpu *gpu, struct rb_pass_animate **out,
                                       struct rb_err *err)
@@ -26,11 +28,14 @@ enum rb_status rb_pass_animate_create(struct rb_gpu *gpu, struct rb_pass_animate
     struct rb_pass_animate *p = calloc(1, sizeof(*p));
     if (!p)
         return rb_errf(err, RB_E_NOMEM, "out of memory");
-    p->gpu = gpu;
-    enum rb_status st = rb_gpu_layout_init(gpu, bindings, 6, sizeof(uint32_t), &p->layout, err);
-    if (st == RB_OK)
-        st = rb_gpu_compute_pipeline(gpu, rb_spv_animate_comp, sizeof(rb_spv_animate_comp),
-                                     p->layout.pipeline_layout, "animate", &p->pipeline, err);
+    enum rb_status st = rb_pass_compute_init(
+        gpu,
+        &(struct rb_pass_compute_desc){.name = "animate",
+                                       RB_PASS_BINDINGS(bindings),
+                                       .push_bytes = sizeof(uint32_t),
+                                       .spv = rb_spv_animate_comp,
+                                       .spv_bytes = sizeof(rb_spv_animate_comp)},
+        &p->pass, err);
     if (st) {
         rb_pass_animate_destroy(p);
         return st;
@@ -42,22 +47,20 @@ enum rb_status rb_pass_animate_create(struct rb_gpu *gpu, struct rb_pass_animate
 void rb_pass_animate_record(struct rb_pass_animate *p, VkCommandBuffer cmd,
                             const struct rb_frame *frame, const struct rb_frame_slot *slot)
 {
-    struct rb_gpu_bindings b = {0};
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &frame->src_vertices);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &frame->morph_deltas);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &slot->instances);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &slot->joints);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &slot->weights);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &slot->vertices);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
-    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout.pipeline_layout,
-                         &b);
+    struct rb_pass_bindings b = {.pass = &p->pass};
+    rb_pass_bind_buffer(&b, RB_BIND_ANIMATE_SRC_VERTICES, &frame->src_vertices);
+    rb_pass_bind_buffer(&b, RB_BIND_ANIMATE_MORPH_DELTAS, &frame->morph_deltas);
+    rb_pass_bind_buffer(&b, RB_BIND_ANIMATE_INSTANCES, &slot->instances);
+    rb_pass_bind_buffer(&b, RB_BIND_ANIMATE_JOINTS, &slot->joints);
+    rb_pass_bind_buffer(&b, RB_BIND_ANIMATE_WEIGHTS, &slot->weights);
+    rb_pass_bind_buffer(&b, RB_BIND_ANIMATE_VERTICES, &slot->vertices);
+    rb_pass_record_bindings(cmd, &b);
     for (uint32_t i = 0; i < frame->instance_count; i++) {
         uint32_t count = frame->instances[i].range[1];
         if (count == 0)
             continue;
-        vkCmdPushConstants(cmd, p->layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0, sizeof(uint32_t),
-                           &i);
+        vkCmdPushConstants(cmd, p->pass.layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0,
+                           sizeof(uint32_t), &i);
         vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
     }
 }
@@ -66,8 +69,6 @@ void rb_pass_animate_destroy(struct rb_pass_animate *p)
 {
     if (!p)
         return;
-    if (p->pipeline)
-        vkDestroyPipeline(p->gpu->device, p->pipeline, NULL);
-    rb_gpu_layout_release(p->gpu, &p->layout);
+    rb_pass_release(&p->pass);
     free(p);
 }

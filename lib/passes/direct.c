@@ -1,25 +1,30 @@
 /* direct: direct light from punctual lights (shadow-mapped) and emission at each G-buffer pixel,
  * the environment where there is no geometry (DESIGN.md "direct"). */
-#include "passes/passes.h"
+#include "passes/passes_int.h"
 
 #include <stdlib.h>
 
 #include "direct.comp.h"
 
 struct rb_pass_direct {
-    struct rb_gpu *gpu;
-    struct rb_gpu_layout layout;
-    VkPipeline pipeline;
+    struct rb_pass pass;
 };
 
-static const VkDescriptorType bindings[] = {
-    VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
-    VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,          VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
-    VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,          VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
-    VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,          VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,         VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-    VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+static const struct rb_pass_binding bindings[] = {
+    RB_PASS_BIND(RB_BIND_DIRECT_GLOBALS, UNIFORM_BUFFER),
+    RB_PASS_BIND(RB_BIND_DIRECT_GB_POSITION, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_DIRECT_GB_NORMAL, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_DIRECT_GB_ALBEDO, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_DIRECT_GB_SPECULAR, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_DIRECT_GB_EMISSION, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_DIRECT_GB_MOTION, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_DIRECT_LIGHTS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_DIRECT_SHADOW_VIEWS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_DIRECT_SHADOW_MAPS, COMBINED_IMAGE_SAMPLER),
+    RB_PASS_BIND(RB_BIND_DIRECT_ENV_MAP, COMBINED_IMAGE_SAMPLER),
+    RB_PASS_BIND(RB_BIND_DIRECT_OUT, STORAGE_IMAGE),
 };
+_Static_assert(COUNT(bindings) == RB_BIND_DIRECT_COUNT, "direct bindings");
 
 enum rb_status rb_pass_direct_create(struct rb_gpu *gpu, struct rb_pass_direct **out,
                                      struct rb_err *err)
@@ -27,11 +32,13 @@ enum rb_status rb_pass_direct_create(struct rb_gpu *gpu, struct rb_pass_direct *
     struct rb_pass_direct *p = calloc(1, sizeof(*p));
     if (!p)
         return rb_errf(err, RB_E_NOMEM, "out of memory");
-    p->gpu = gpu;
-    enum rb_status st = rb_gpu_layout_init(gpu, bindings, 12, 0, &p->layout, err);
-    if (st == RB_OK)
-        st = rb_gpu_compute_pipeline(gpu, rb_spv_direct_comp, sizeof(rb_spv_direct_comp),
-                                     p->layout.pipeline_layout, "direct", &p->pipeline, err);
+    enum rb_status st = rb_pass_compute_init(
+        gpu,
+        &(struct rb_pass_compute_desc){.name = "direct",
+                                       RB_PASS_BINDINGS(bindings),
+                                       .spv = rb_spv_direct_comp,
+                                       .spv_bytes = sizeof(rb_spv_direct_comp)},
+        &p->pass, err);
     if (st) {
         rb_pass_direct_destroy(p);
         return st;
@@ -43,22 +50,22 @@ enum rb_status rb_pass_direct_create(struct rb_gpu *gpu, struct rb_pass_direct *
 void rb_pass_direct_record(struct rb_pass_direct *p, VkCommandBuffer cmd,
                            const struct rb_frame *frame)
 {
-    struct rb_gpu_bindings b = {0};
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, &frame->globals);
-    for (int i = 0; i < RB_GBUFFER_COLOR_COUNT; i++)
-        rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, frame->gbuffer[i].view,
-                          VK_NULL_HANDLE, VK_IMAGE_LAYOUT_GENERAL);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &frame->lights);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &frame->shadow_views);
-    rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, frame->shadow_maps.view,
-                      p->gpu->nearest_sampler, VK_IMAGE_LAYOUT_GENERAL);
-    rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, frame->env_map.view,
-                      p->gpu->env_sampler, VK_IMAGE_LAYOUT_GENERAL);
-    rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, frame->direct.view, VK_NULL_HANDLE,
-                      VK_IMAGE_LAYOUT_GENERAL);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
-    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout.pipeline_layout,
-                         &b);
+    const struct rb_gpu_image *gb = frame->gbuffer;
+    struct rb_pass_bindings b = {.pass = &p->pass};
+    rb_pass_bind_buffer(&b, RB_BIND_DIRECT_GLOBALS, &frame->globals);
+    rb_pass_bind_image(&b, RB_BIND_DIRECT_GB_POSITION, gb[RB_GB_POSITION].view, VK_NULL_HANDLE);
+    rb_pass_bind_image(&b, RB_BIND_DIRECT_GB_NORMAL, gb[RB_GB_NORMAL].view, VK_NULL_HANDLE);
+    rb_pass_bind_image(&b, RB_BIND_DIRECT_GB_ALBEDO, gb[RB_GB_ALBEDO].view, VK_NULL_HANDLE);
+    rb_pass_bind_image(&b, RB_BIND_DIRECT_GB_SPECULAR, gb[RB_GB_SPECULAR].view, VK_NULL_HANDLE);
+    rb_pass_bind_image(&b, RB_BIND_DIRECT_GB_EMISSION, gb[RB_GB_EMISSION].view, VK_NULL_HANDLE);
+    rb_pass_bind_image(&b, RB_BIND_DIRECT_GB_MOTION, gb[RB_GB_MOTION].view, VK_NULL_HANDLE);
+    rb_pass_bind_buffer(&b, RB_BIND_DIRECT_LIGHTS, &frame->lights);
+    rb_pass_bind_buffer(&b, RB_BIND_DIRECT_SHADOW_VIEWS, &frame->shadow_views);
+    rb_pass_bind_image(&b, RB_BIND_DIRECT_SHADOW_MAPS, frame->shadow_maps.view,
+                       p->pass.gpu->nearest_sampler);
+    rb_pass_bind_image(&b, RB_BIND_DIRECT_ENV_MAP, frame->env_map.view, p->pass.gpu->env_sampler);
+    rb_pass_bind_image(&b, RB_BIND_DIRECT_OUT, frame->direct.view, VK_NULL_HANDLE);
+    rb_pass_record_bindings(cmd, &b);
     vkCmdDispatch(cmd, (frame->width_px + 7) / 8, (frame->height_px + 7) / 8, 1);
 }
 
@@ -66,8 +73,6 @@ void rb_pass_direct_destroy(struct rb_pass_direct *p)
 {
     if (!p)
         return;
-    if (p->pipeline)
-        vkDestroyPipeline(p->gpu->device, p->pipeline, NULL);
-    rb_gpu_layout_release(p->gpu, &p->layout);
+    rb_pass_release(&p->pass);
     free(p);
 }

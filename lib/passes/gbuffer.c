@@ -1,7 +1,7 @@
 /* gbuffer: rasterizes the world-space vertices once, all instances in one indexed draw, into
  * full-precision attachments (DESIGN.md "gbuffer"): position and view depth, shading normal and
  * face, diffuse albedo, specular F0 and roughness, emission and F90, motion vectors. */
-#include "passes/passes.h"
+#include "passes/passes_int.h"
 
 #include <stdlib.h>
 
@@ -14,16 +14,18 @@ const VkFormat rb_gbuffer_formats[RB_GBUFFER_COLOR_COUNT] = {
 };
 
 struct rb_pass_gbuffer {
-    struct rb_gpu *gpu;
-    struct rb_gpu_layout layout;
-    VkPipeline pipeline;
+    struct rb_pass pass;
 };
 
-static const VkDescriptorType bindings[] = {
-    VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-    VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+static const struct rb_pass_binding bindings[] = {
+    RB_PASS_BIND(RB_BIND_GBUFFER_GLOBALS, UNIFORM_BUFFER),
+    RB_PASS_BIND(RB_BIND_GBUFFER_VERTICES, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_GBUFFER_PREV_VERTICES, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_GBUFFER_MATERIALS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_GBUFFER_SRGB_TEXTURES, COMBINED_IMAGE_SAMPLER),
+    RB_PASS_BIND(RB_BIND_GBUFFER_LINEAR_TEXTURES, COMBINED_IMAGE_SAMPLER),
 };
+_Static_assert(COUNT(bindings) == RB_BIND_GBUFFER_COUNT, "gbuffer bindings");
 
 enum rb_status rb_pass_gbuffer_create(struct rb_gpu *gpu, struct rb_pass_gbuffer **out,
                                       struct rb_err *err)
@@ -31,24 +33,24 @@ enum rb_status rb_pass_gbuffer_create(struct rb_gpu *gpu, struct rb_pass_gbuffer
     struct rb_pass_gbuffer *p = calloc(1, sizeof(*p));
     if (!p)
         return rb_errf(err, RB_E_NOMEM, "out of memory");
-    p->gpu = gpu;
-    enum rb_status st = rb_gpu_layout_init(gpu, bindings, 6, 0, &p->layout, err);
-    if (st == RB_OK)
-        st = rb_gpu_graphics_pipeline(
-            gpu,
-            &(struct rb_gpu_graphics_desc){
-                .vert = rb_spv_gbuffer_vert,
-                .vert_bytes = sizeof(rb_spv_gbuffer_vert),
-                .frag = rb_spv_gbuffer_frag,
-                .frag_bytes = sizeof(rb_spv_gbuffer_frag),
-                .layout = p->layout.pipeline_layout,
-                .color_formats = rb_gbuffer_formats,
-                .color_count = RB_GBUFFER_COLOR_COUNT,
-                .depth_format = VK_FORMAT_D32_SFLOAT,
-                .cull = VK_CULL_MODE_NONE, /* single-sided materials discard back faces */
-                .debug_name = "gbuffer",
-            },
-            &p->pipeline, err);
+    enum rb_status st = rb_pass_raster_init(
+        gpu,
+        &(struct rb_pass_raster_desc){
+            .name = "gbuffer",
+            RB_PASS_BINDINGS(bindings),
+            .graphics =
+                {
+                    .vert = rb_spv_gbuffer_vert,
+                    .vert_bytes = sizeof(rb_spv_gbuffer_vert),
+                    .frag = rb_spv_gbuffer_frag,
+                    .frag_bytes = sizeof(rb_spv_gbuffer_frag),
+                    .color_formats = rb_gbuffer_formats,
+                    .color_count = RB_GBUFFER_COLOR_COUNT,
+                    .depth_format = VK_FORMAT_D32_SFLOAT,
+                    .cull = VK_CULL_MODE_NONE, /* single-sided materials discard back faces */
+                },
+        },
+        &p->pass, err);
     if (st) {
         rb_pass_gbuffer_destroy(p);
         return st;
@@ -87,20 +89,18 @@ void rb_pass_gbuffer_record(struct rb_pass_gbuffer *p, VkCommandBuffer cmd,
         .pColorAttachments = colors,
         .pDepthAttachment = &depth,
     };
-    struct rb_gpu_bindings b = {0};
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, &frame->globals);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &cur->vertices);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &prev->vertices);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &frame->materials);
-    rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, frame->srgb_textures.view,
-                      p->gpu->linear_sampler, VK_IMAGE_LAYOUT_GENERAL);
-    rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, frame->linear_textures.view,
-                      p->gpu->linear_sampler, VK_IMAGE_LAYOUT_GENERAL);
+    struct rb_pass_bindings b = {.pass = &p->pass};
+    rb_pass_bind_buffer(&b, RB_BIND_GBUFFER_GLOBALS, &frame->globals);
+    rb_pass_bind_buffer(&b, RB_BIND_GBUFFER_VERTICES, &cur->vertices);
+    rb_pass_bind_buffer(&b, RB_BIND_GBUFFER_PREV_VERTICES, &prev->vertices);
+    rb_pass_bind_buffer(&b, RB_BIND_GBUFFER_MATERIALS, &frame->materials);
+    rb_pass_bind_image(&b, RB_BIND_GBUFFER_SRGB_TEXTURES, frame->srgb_textures.view,
+                       p->pass.gpu->linear_sampler);
+    rb_pass_bind_image(&b, RB_BIND_GBUFFER_LINEAR_TEXTURES, frame->linear_textures.view,
+                       p->pass.gpu->linear_sampler);
 
     vkCmdBeginRendering(cmd, &ri);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p->pipeline);
-    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p->layout.pipeline_layout,
-                         &b);
+    rb_pass_record_bindings(cmd, &b);
     VkViewport vp = {0, 0, (float)frame->width_px, (float)frame->height_px, 0.0f, 1.0f};
     VkRect2D sc = {{0, 0}, {frame->width_px, frame->height_px}};
     vkCmdSetViewport(cmd, 0, 1, &vp);
@@ -116,8 +116,6 @@ void rb_pass_gbuffer_destroy(struct rb_pass_gbuffer *p)
 {
     if (!p)
         return;
-    if (p->pipeline)
-        vkDestroyPipeline(p->gpu->device, p->pipeline, NULL);
-    rb_gpu_layout_release(p->gpu, &p->layout);
+    rb_pass_release(&p->pass);
     free(p);
 }

@@ -1,7 +1,7 @@
 /* output: packs beauty and the named layers into one host-visible buffer, so a frame is read
  * back with a single copy (the order is RB_OUT_* in shaders/common/shared.h), and counts the
  * NaN and infinite values it writes, so none reaches a file unnoticed. */
-#include "passes/passes.h"
+#include "passes/passes_int.h"
 
 #include <stdlib.h>
 
@@ -9,18 +9,22 @@
 
 struct rb_pass_output {
     struct rb_gpu *gpu;
-    struct rb_gpu_layout layout;
-    VkPipeline pipeline;
+    struct rb_pass pass;
     struct rb_gpu_buffer nonfinite; /* one uint32, host-visible: zeroed, then added to */
 };
 
-static const VkDescriptorType bindings[] = {
-    VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
-    VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,  VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
-    VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,  VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
-    VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,  VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+static const struct rb_pass_binding bindings[] = {
+    RB_PASS_BIND(RB_BIND_OUTPUT_GLOBALS, UNIFORM_BUFFER),
+    RB_PASS_BIND(RB_BIND_OUTPUT_BEAUTY, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_OUTPUT_DIRECT, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_OUTPUT_ALBEDO, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_OUTPUT_NORMAL, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_OUTPUT_POSITION, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_OUTPUT_MOTION, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_OUTPUT_READBACK, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_OUTPUT_NONFINITE, STORAGE_BUFFER),
 };
+_Static_assert(COUNT(bindings) == RB_BIND_OUTPUT_COUNT, "output bindings");
 
 enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output **out,
                                      struct rb_err *err)
@@ -29,19 +33,22 @@ enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output *
     if (!p)
         return rb_errf(err, RB_E_NOMEM, "out of memory");
     p->gpu = gpu;
-    enum rb_status st = rb_gpu_layout_init(gpu, bindings, 9, 0, &p->layout, err);
+    enum rb_status st = rb_gpu_buffer_init(
+        gpu,
+        &(struct rb_gpu_buffer_desc){.size_bytes = sizeof(uint32_t),
+                                     .usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+                                              VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                     .is_host_visible = true,
+                                     .debug_name = "output.nonfinite"},
+        &p->nonfinite, err);
     if (st == RB_OK)
-        st = rb_gpu_buffer_init(
+        st = rb_pass_compute_init(
             gpu,
-            &(struct rb_gpu_buffer_desc){.size_bytes = sizeof(uint32_t),
-                                         .usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
-                                                  VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                         .is_host_visible = true,
-                                         .debug_name = "output.nonfinite"},
-            &p->nonfinite, err);
-    if (st == RB_OK)
-        st = rb_gpu_compute_pipeline(gpu, rb_spv_output_comp, sizeof(rb_spv_output_comp),
-                                     p->layout.pipeline_layout, "output", &p->pipeline, err);
+            &(struct rb_pass_compute_desc){.name = "output",
+                                           RB_PASS_BINDINGS(bindings),
+                                           .spv = rb_spv_output_comp,
+                                           .spv_bytes = sizeof(rb_spv_output_comp)},
+            &p->pass, err);
     if (st) {
         rb_pass_output_destroy(p);
         return st;
@@ -53,21 +60,20 @@ enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output *
 void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
                            const struct rb_frame *frame)
 {
-    const struct rb_gpu_image *images[] = {
-        frame->beauty,
-        &frame->direct,
-        &frame->gbuffer[RB_GB_ALBEDO],
-        &frame->gbuffer[RB_GB_NORMAL],
-        &frame->gbuffer[RB_GB_POSITION],
-        &frame->gbuffer[RB_GB_MOTION],
-    };
-    struct rb_gpu_bindings b = {0};
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, &frame->globals);
-    for (size_t i = 0; i < sizeof(images) / sizeof(images[0]); i++)
-        rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, images[i]->view, VK_NULL_HANDLE,
-                          VK_IMAGE_LAYOUT_GENERAL);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &frame->readback);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &p->nonfinite);
+    struct rb_pass_bindings b = {.pass = &p->pass};
+    rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_GLOBALS, &frame->globals);
+    rb_pass_bind_image(&b, RB_BIND_OUTPUT_BEAUTY, frame->beauty->view, VK_NULL_HANDLE);
+    rb_pass_bind_image(&b, RB_BIND_OUTPUT_DIRECT, frame->direct.view, VK_NULL_HANDLE);
+    rb_pass_bind_image(&b, RB_BIND_OUTPUT_ALBEDO, frame->gbuffer[RB_GB_ALBEDO].view,
+                       VK_NULL_HANDLE);
+    rb_pass_bind_image(&b, RB_BIND_OUTPUT_NORMAL, frame->gbuffer[RB_GB_NORMAL].view,
+                       VK_NULL_HANDLE);
+    rb_pass_bind_image(&b, RB_BIND_OUTPUT_POSITION, frame->gbuffer[RB_GB_POSITION].view,
+                       VK_NULL_HANDLE);
+    rb_pass_bind_image(&b, RB_BIND_OUTPUT_MOTION, frame->gbuffer[RB_GB_MOTION].view,
+                       VK_NULL_HANDLE);
+    rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_READBACK, &frame->readback);
+    rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_NONFINITE, &p->nonfinite);
     /* The count starts from zero on the device, ordered before the shader's atomic adds. */
     vkCmdFillBuffer(cmd, p->nonfinite.buffer, 0, VK_WHOLE_SIZE, 0);
     VkMemoryBarrier2 zeroed = {
@@ -80,9 +86,7 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
     vkCmdPipelineBarrier2(cmd, &(VkDependencyInfo){.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
                                                    .memoryBarrierCount = 1,
                                                    .pMemoryBarriers = &zeroed});
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
-    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout.pipeline_layout,
-                         &b);
+    rb_pass_record_bindings(cmd, &b);
     vkCmdDispatch(cmd, (frame->width_px + 7) / 8, (frame->height_px + 7) / 8, 1);
     /* Make the shader writes visible to the host's read after the fence. */
     VkMemoryBarrier2 mb = {
@@ -107,9 +111,7 @@ void rb_pass_output_destroy(struct rb_pass_output *p)
 {
     if (!p)
         return;
-    if (p->pipeline)
-        vkDestroyPipeline(p->gpu->device, p->pipeline, NULL);
+    rb_pass_release(&p->pass);
     rb_gpu_buffer_release(p->gpu, &p->nonfinite);
-    rb_gpu_layout_release(p->gpu, &p->layout);
     free(p);
 }

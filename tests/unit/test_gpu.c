@@ -1,6 +1,8 @@
 /* The GPU context: lavapipe is found and chosen by default, a device that does not exist is
  * RB_E_NODEVICE, and a validation-layer message makes rb_gpu_check_validation (and with it every
- * submit) fail -- the plumbing that lets the test suite treat validation errors as failures. */
+ * submit) fail -- the plumbing that lets the test suite treat validation errors as failures.
+ * Descriptor layouts past the old 16 bindings work, and layouts past the device's limits fail at
+ * create time with the limit's name. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -11,6 +13,9 @@
 #include <cmocka.h>
 
 #include "gpu/gpu.h"
+
+#include "bindings_shared.h"
+#include "many_bindings.comp.h"
 
 static char first_error[1024];
 
@@ -86,12 +91,165 @@ static void test_validation_message_fails(void **state)
     rb_gpu_destroy(gpu);
 }
 
+/* 19 storage buffers in and one out: each input holds a value of its own, and the shader copies
+ * input i to out[i], so a binding that reached the wrong buffer (or none) shows. The bindings are
+ * set in reverse order: they land by number, not by call order. */
+static void test_many_bindings(void **state)
+{
+    (void)state;
+    enum { IN_COUNT = RB_BIND_MANY_BINDINGS_COUNT - 1 };
+    _Static_assert(RB_BIND_MANY_BINDINGS_COUNT > 16, "more than the old fixed 16");
+    struct rb_gpu *gpu = NULL;
+    struct rb_err err = RB_ERR_INIT;
+    enum rb_status st = rb_gpu_create(&(struct rb_gpu_desc){.validate = true}, &gpu, &err);
+    if (st)
+        fail_msg("%s", err.msg);
+    struct rb_gpu_buffer in[IN_COUNT] = {{0}}, out = {0};
+    for (int i = 0; i < IN_COUNT; i++) {
+        assert_int_equal(rb_gpu_buffer_init(gpu,
+                                            &(struct rb_gpu_buffer_desc){
+                                                .size_bytes = sizeof(uint32_t),
+                                                .usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                .is_host_visible = true,
+                                                .debug_name = "many_bindings.in"},
+                                            &in[i], &err),
+                         RB_OK);
+        *(uint32_t *)in[i].mapped = 0x5eed0000u + 97u * (uint32_t)i;
+    }
+    assert_int_equal(
+        rb_gpu_buffer_init(gpu,
+                           &(struct rb_gpu_buffer_desc){.size_bytes = IN_COUNT * sizeof(uint32_t),
+                                                        .usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                                        .is_host_visible = true,
+                                                        .debug_name = "many_bindings.out"},
+                           &out, &err),
+        RB_OK);
+    memset(out.mapped, 0, IN_COUNT * sizeof(uint32_t));
+
+    VkDescriptorType types[RB_BIND_MANY_BINDINGS_COUNT];
+    for (int i = 0; i < RB_BIND_MANY_BINDINGS_COUNT; i++)
+        types[i] = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    struct rb_gpu_layout layout = {0};
+    VkPipeline pipe = VK_NULL_HANDLE;
+    st = rb_gpu_layout_init(gpu, types, RB_BIND_MANY_BINDINGS_COUNT, 0, &layout, &err);
+    if (st)
+        fail_msg("%s", err.msg);
+    assert_int_equal(layout.binding_count, RB_BIND_MANY_BINDINGS_COUNT);
+    assert_int_equal(rb_gpu_compute_pipeline(gpu, rb_spv_many_bindings_comp,
+                                             sizeof(rb_spv_many_bindings_comp),
+                                             layout.pipeline_layout, "many_bindings", &pipe, &err),
+                     RB_OK);
+    assert_int_equal(rb_gpu_begin(gpu, &err), RB_OK);
+    struct rb_gpu_bindings b = {0};
+    rb_gpu_bindings_set_buffer(&b, RB_BIND_MANY_BINDINGS_OUT, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                               &out);
+    for (int i = IN_COUNT - 1; i >= 0; i--)
+        rb_gpu_bindings_set_buffer(&b, RB_BIND_MANY_BINDINGS_IN + (uint32_t)i,
+                                   VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &in[i]);
+    assert_int_equal(b.count, RB_BIND_MANY_BINDINGS_COUNT);
+    vkCmdBindPipeline(gpu->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe);
+    rb_gpu_push_bindings(gpu, gpu->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout.pipeline_layout, &b);
+    vkCmdDispatch(gpu->cmd, 1, 1, 1);
+    VkMemoryBarrier2 mb = {
+        .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
+        .srcStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+        .srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+        .dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT,
+        .dstAccessMask = VK_ACCESS_2_HOST_READ_BIT,
+    };
+    vkCmdPipelineBarrier2(gpu->cmd, &(VkDependencyInfo){.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
+                                                        .memoryBarrierCount = 1,
+                                                        .pMemoryBarriers = &mb});
+    st = rb_gpu_submit_wait(gpu, &err); /* fails on any validation message */
+    if (st)
+        fail_msg("%s", err.msg);
+    const uint32_t *o = out.mapped;
+    for (int i = 0; i < IN_COUNT; i++)
+        assert_int_equal(o[i], 0x5eed0000u + 97u * (uint32_t)i);
+    assert_int_equal(gpu->validation_messages, 0);
+
+    vkDestroyPipeline(gpu->device, pipe, NULL);
+    rb_gpu_layout_release(gpu, &layout);
+    rb_gpu_buffer_release(gpu, &out);
+    for (int i = 0; i < IN_COUNT; i++)
+        rb_gpu_buffer_release(gpu, &in[i]);
+    rb_gpu_destroy(gpu);
+}
+
+/* A layout past a limit is refused before Vulkan sees it, naming the limit and both numbers:
+ * on the device (33 bindings against lavapipe's 32 push descriptors) and against made-up limits
+ * for each per-stage count. */
+static void test_layout_limits(void **state)
+{
+    (void)state;
+    struct rb_gpu *gpu = NULL;
+    struct rb_err err = RB_ERR_INIT;
+    enum rb_status st = rb_gpu_create(&(struct rb_gpu_desc){.validate = true}, &gpu, &err);
+    if (st)
+        fail_msg("%s", err.msg);
+    VkDescriptorType types[RB_GPU_MAX_BINDINGS + 1];
+    for (int i = 0; i < RB_GPU_MAX_BINDINGS + 1; i++)
+        types[i] = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    struct rb_gpu_layout layout = {0};
+    assert_int_equal(rb_gpu_layout_init(gpu, types, RB_GPU_MAX_BINDINGS + 1, 0, &layout, &err),
+                     RB_E_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "33 bindings, more than maxPushDescriptors (32)"));
+    assert_null(layout.set_layout);
+    /* The most the device and the binding list allow is fine. */
+    st = rb_gpu_layout_init(gpu, types, RB_GPU_MAX_BINDINGS, 0, &layout, &err);
+    if (st)
+        fail_msg("%s", err.msg);
+    rb_gpu_layout_release(gpu, &layout);
+    assert_int_equal(rb_gpu_check_validation(gpu, &err), RB_OK);
+
+    VkPhysicalDeviceLimits lim = gpu->props.limits;
+    assert_int_equal(rb_gpu_layout_check(&lim, 32, types, 20, &err), RB_OK);
+    assert_int_equal(rb_gpu_layout_check(&lim, 16, types, 20, &err), RB_E_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "20 bindings, more than maxPushDescriptors (16)"));
+    lim.maxPerStageDescriptorStorageBuffers = 16;
+    assert_int_equal(rb_gpu_layout_check(&lim, 32, types, 20, &err), RB_E_UNSUPPORTED);
+    assert_non_null(
+        strstr(err.msg, "20 storage buffers, more than maxPerStageDescriptorStorageBuffers (16)"));
+    lim = gpu->props.limits;
+    lim.maxPerStageResources = 19;
+    assert_int_equal(rb_gpu_layout_check(&lim, 32, types, 20, &err), RB_E_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "20 resources, more than maxPerStageResources (19)"));
+
+    const VkDescriptorType mixed[] = {
+        VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,         VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
+        VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,          VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+        VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_SAMPLER,
+    };
+    lim = gpu->props.limits;
+    assert_int_equal(rb_gpu_layout_check(&lim, 32, mixed, 6, &err), RB_OK);
+    lim.maxPerStageDescriptorUniformBuffers = 1;
+    assert_int_equal(rb_gpu_layout_check(&lim, 32, mixed, 6, &err), RB_E_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "2 uniform buffers"));
+    lim = gpu->props.limits;
+    lim.maxPerStageDescriptorStorageImages = 1;
+    assert_int_equal(rb_gpu_layout_check(&lim, 32, mixed, 6, &err), RB_E_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "2 storage images"));
+    lim = gpu->props.limits;
+    lim.maxPerStageDescriptorSamplers = 1; /* the combined image sampler counts as one */
+    assert_int_equal(rb_gpu_layout_check(&lim, 32, mixed, 6, &err), RB_E_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "2 samplers"));
+    lim = gpu->props.limits;
+    lim.maxPerStageResources = 5; /* the sampler alone is not a resource */
+    assert_int_equal(rb_gpu_layout_check(&lim, 32, mixed, 6, &err), RB_OK);
+    lim.maxPerStageResources = 4;
+    assert_int_equal(rb_gpu_layout_check(&lim, 32, mixed, 6, &err), RB_E_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "5 resources, more than maxPerStageResources (4)"));
+    rb_gpu_destroy(gpu);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_default_is_lavapipe),
         cmocka_unit_test(test_missing_device),
         cmocka_unit_test(test_validation_message_fails),
+        cmocka_unit_test(test_many_bindings),
+        cmocka_unit_test(test_layout_limits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
