@@ -23,6 +23,9 @@ enum rb_status rb_gpu_layout_init(struct rb_gpu *gpu, const VkDescriptorType *ty
     VkDescriptorSetLayoutBinding bindings[16];
     if (count > 16)
         RB_BUG("%u bindings", count);
+    enum rb_status st = rb_gpu_check_push_descriptors(gpu, NULL, count, err);
+    if (st)
+        return st;
     for (uint32_t i = 0; i < count; i++)
         bindings[i] = (VkDescriptorSetLayoutBinding){
             .binding = i,
@@ -191,6 +194,15 @@ void rb_gpu_bind_buffer(struct rb_gpu_bindings *b, VkDescriptorType type,
         .descriptorType = type,
         .pBufferInfo = &b->buffers[i],
     };
+}
+
+void rb_gpu_bind_buffer_range(struct rb_gpu_bindings *b, VkDescriptorType type,
+                              const struct rb_gpu_buffer *buf, VkDeviceSize offset_bytes,
+                              VkDeviceSize range_bytes)
+{
+    rb_gpu_bind_buffer(b, type, buf);
+    b->buffers[b->count - 1].offset = offset_bytes;
+    b->buffers[b->count - 1].range = range_bytes;
 }
 
 void rb_gpu_bind_image(struct rb_gpu_bindings *b, VkDescriptorType type, VkImageView view,
