@@ -14,6 +14,11 @@ struct rb_pass_output {
     struct rb_gpu_buffer nonfinite; /* one uint32, host-visible: zeroed, then added to */
 };
 
+/* The push constants of shaders/output.comp: the band of rows one dispatch writes. */
+struct band {
+    uint32_t first_row, row_count;
+};
+
 static const VkDescriptorType bindings[] = {
     VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
     VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,  VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
@@ -29,7 +34,7 @@ enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output *
     if (!p)
         return rb_errf(err, RB_E_NOMEM, "out of memory");
     p->gpu = gpu;
-    enum rb_status st = rb_gpu_layout_init(gpu, bindings, 9, 0, &p->layout, err);
+    enum rb_status st = rb_gpu_layout_init(gpu, bindings, 9, sizeof(struct band), &p->layout, err);
     if (st == RB_OK)
         st = rb_gpu_buffer_init(
             gpu,
@@ -61,13 +66,6 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
         &frame->gbuffer[RB_GB_POSITION],
         &frame->gbuffer[RB_GB_MOTION],
     };
-    struct rb_gpu_bindings b = {0};
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, &frame->globals);
-    for (size_t i = 0; i < sizeof(images) / sizeof(images[0]); i++)
-        rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, images[i]->view, VK_NULL_HANDLE,
-                          VK_IMAGE_LAYOUT_GENERAL);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &frame->readback);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &p->nonfinite);
     /* The count starts from zero on the device, ordered before the shader's atomic adds. */
     vkCmdFillBuffer(cmd, p->nonfinite.buffer, 0, VK_WHOLE_SIZE, 0);
     VkMemoryBarrier2 zeroed = {
@@ -81,9 +79,30 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
                                                    .memoryBarrierCount = 1,
                                                    .pMemoryBarriers = &zeroed});
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
-    rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout.pipeline_layout,
-                         &b);
-    vkCmdDispatch(cmd, (frame->width_px + 7) / 8, (frame->height_px + 7) / 8, 1);
+    /* The readback outgrows maxStorageBufferRange (1920x1080 is 166 MB, lavapipe binds 128 MiB):
+     * it is written one band of rows at a time, each bound as its own aligned range, so the host
+     * still reads one buffer, rows top to bottom. rb_frame_init checked that a band fits. */
+    VkDeviceSize row_bytes = (VkDeviceSize)frame->width_px * RB_OUT_FLOATS * sizeof(float);
+    uint32_t band_rows = rb_gpu_storage_band_rows(p->gpu, row_bytes, frame->height_px);
+    if (band_rows == 0)
+        RB_BUG("readback rows of %llu bytes fit no storage binding", (unsigned long long)row_bytes);
+    for (uint32_t first = 0; first < frame->height_px; first += band_rows) {
+        uint32_t rows = frame->height_px - first;
+        struct band band = {first, rows < band_rows ? rows : band_rows};
+        struct rb_gpu_bindings b = {0};
+        rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, &frame->globals);
+        for (size_t i = 0; i < sizeof(images) / sizeof(images[0]); i++)
+            rb_gpu_bind_image(&b, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, images[i]->view, VK_NULL_HANDLE,
+                              VK_IMAGE_LAYOUT_GENERAL);
+        rb_gpu_bind_buffer_range(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &frame->readback,
+                                 first * row_bytes, band.row_count * row_bytes);
+        rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &p->nonfinite);
+        rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout.pipeline_layout,
+                             &b);
+        vkCmdPushConstants(cmd, p->layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0, sizeof(band),
+                           &band);
+        vkCmdDispatch(cmd, (frame->width_px + 7) / 8, (band.row_count + 7) / 8, 1);
+    }
     /* Make the shader writes visible to the host's read after the fence. */
     VkMemoryBarrier2 mb = {
         .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
