@@ -19,6 +19,14 @@ layout(binding = RB_BIND_OUTPUT_MOTION, rgba32f) uniform readonly image2D gb_mot
 layout(std430, binding = RB_BIND_OUTPUT_READBACK) writeonly buffer Out { float o[]; };
 layout(std430, binding = RB_BIND_OUTPUT_NONFINITE) buffer Nonfinite { uint nonfinite; };
 
+// The band of rows this dispatch writes: Out is bound from the band's first row, so indices
+// into it count from there (lib/passes/output.c splits frames larger than one binding may be).
+layout(push_constant) uniform Band
+{
+    uint first_row;
+    uint row_count;
+} band;
+
 uint bad = 0u;
 
 // Writes one float and counts it when its exponent is all ones (NaN or Inf): a test of the bits,
@@ -31,8 +39,9 @@ void put(uint i, float x)
 
 void main()
 {
-    uvec2 px = gl_GlobalInvocationID.xy;
-    if (any(greaterThanEqual(px, g.size.xy)))
+    uint row = gl_GlobalInvocationID.y; // within the band
+    uvec2 px = uvec2(gl_GlobalInvocationID.x, band.first_row + row);
+    if (px.x >= g.size.x || row >= band.row_count)
         return;
     ivec2 ip = ivec2(px);
     vec4 pos = imageLoad(gb_position, ip);
@@ -42,7 +51,7 @@ void main()
     vec3 a = hit ? imageLoad(gb_albedo, ip).rgb : vec3(0.0);
     vec3 n = hit ? imageLoad(gb_normal, ip).xyz : vec3(0.0);
     vec2 m = hit ? imageLoad(gb_motion, ip).xy : vec2(0.0);
-    uint base = (px.y * g.size.x + px.x) * RB_OUT_FLOATS;
+    uint base = (row * g.size.x + px.x) * RB_OUT_FLOATS;
     put(base + RB_OUT_BEAUTY + 0, b.r);
     put(base + RB_OUT_BEAUTY + 1, b.g);
     put(base + RB_OUT_BEAUTY + 2, b.b);

@@ -1,6 +1,7 @@
 /* Instance, device selection and validation. The renderer's requirements (API version,
  * features, extensions) are in one table here, with one message per missing item. */
 #include "gpu/gpu.h"
+#include "gpu/gpu_int.h"
 
 #include <ctype.h>
 #include <stdlib.h>
@@ -306,6 +307,7 @@ enum rb_status rb_gpu_create(const struct rb_gpu_desc *desc, struct rb_gpu **out
         goto fail;
     vkGetPhysicalDeviceProperties(gpu->phys, &gpu->props);
     vkGetPhysicalDeviceMemoryProperties(gpu->phys, &gpu->mem_props);
+    rb_gpu_read_limits(gpu);
     rb_strlcpy(gpu->device_name, gpu->props.deviceName, sizeof(gpu->device_name));
     describe_driver(gpu->phys, gpu->driver, sizeof(gpu->driver));
     gpu->is_lavapipe = is_lavapipe(&gpu->props);

@@ -23,6 +23,9 @@ struct rb_gpu {
     uint32_t queue_family;
     VkPhysicalDeviceProperties props;
     VkPhysicalDeviceMemoryProperties mem_props;
+    uint32_t max_push_descriptors;     /* VkPhysicalDevicePushDescriptorPropertiesKHR */
+    VkDeviceSize max_buffer_bytes;     /* maxBufferSize (Vulkan 1.3) */
+    VkDeviceSize max_allocation_bytes; /* maxMemoryAllocationSize (Vulkan 1.1) */
     char device_name[VK_MAX_PHYSICAL_DEVICE_NAME_SIZE];
     char driver[256]; /* driver name and info, e.g. "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)" */
     bool is_lavapipe;
@@ -75,6 +78,43 @@ const char *rb_gpu_result_name(VkResult vr);
 
 /* Fails when the validation layer has spoken since creation (tests run with validation on). */
 enum rb_status rb_gpu_check_validation(struct rb_gpu *gpu, struct rb_err *err);
+
+/* ---- device limits ------------------------------------------------------------------------- */
+
+/* Checks a size the renderer is about to use against a device limit, at create time, so that a
+ * frame or a scene too large for the device fails with a message naming the pass, the resource,
+ * the size and the limit, instead of in the validation layer (or silently without it). Each
+ * returns RB_E_UNSUPPORTED with that message, or RB_OK. pass may be NULL where no pass is known.
+ * Thread-safe: they only read the limits read at rb_gpu_create. */
+
+/* A storage-buffer binding of range_bytes against maxStorageBufferRange. */
+enum rb_status rb_gpu_check_storage_range(const struct rb_gpu *gpu, const char *pass,
+                                          const char *resource, VkDeviceSize range_bytes,
+                                          struct rb_err *err);
+/* One buffer of size_bytes against maxBufferSize and maxMemoryAllocationSize (one allocation per
+ * buffer, as lib/gpu/memory.c allocates). */
+enum rb_status rb_gpu_check_buffer_size(const struct rb_gpu *gpu, const char *pass,
+                                        const char *resource, VkDeviceSize size_bytes,
+                                        struct rb_err *err);
+/* A dispatch of x * y * z workgroups against maxComputeWorkGroupCount, per dimension. */
+enum rb_status rb_gpu_check_dispatch(const struct rb_gpu *gpu, const char *pass, uint32_t x,
+                                     uint32_t y, uint32_t z, struct rb_err *err);
+/* A push-descriptor set layout of binding_count bindings against maxPushDescriptors. */
+enum rb_status rb_gpu_check_push_descriptors(const struct rb_gpu *gpu, const char *pass,
+                                             uint32_t binding_count, struct rb_err *err);
+
+/* A buffer of row_count rows of row_bytes each, bound as storage one band of rows at a time:
+ * the rows per band. All rows when the whole buffer fits in maxStorageBufferRange; otherwise the
+ * most rows that fit whose bytes are a multiple of minStorageBufferOffsetAlignment, so every band
+ * starts aligned (the last band may be shorter). 0 when not even one aligned band fits. Pure
+ * arithmetic on the limits: safe in a pass's record once its create has checked it with
+ * rb_gpu_check_storage_bands. */
+uint32_t rb_gpu_storage_band_rows(const struct rb_gpu *gpu, VkDeviceSize row_bytes,
+                                  uint32_t row_count);
+/* Fails when rb_gpu_storage_band_rows would return 0, naming the smallest aligned band. */
+enum rb_status rb_gpu_check_storage_bands(const struct rb_gpu *gpu, const char *pass,
+                                          const char *resource, VkDeviceSize row_bytes,
+                                          uint32_t row_count, struct rb_err *err);
 
 /* ---- buffers ------------------------------------------------------------------------------- */
 
@@ -226,6 +266,11 @@ struct rb_gpu_bindings {
 /* Sets the given binding, whatever the order of the calls. */
 void rb_gpu_bindings_set_buffer(struct rb_gpu_bindings *b, uint32_t binding, VkDescriptorType type,
                                 const struct rb_gpu_buffer *buf);
+/* Binds range_bytes of buf from offset_bytes at binding: a band of a buffer larger than a
+ * binding may be (rb_gpu_storage_band_rows). */
+void rb_gpu_bindings_set_buffer_range(struct rb_gpu_bindings *b, uint32_t binding,
+                                      VkDescriptorType type, const struct rb_gpu_buffer *buf,
+                                      VkDeviceSize offset_bytes, VkDeviceSize range_bytes);
 void rb_gpu_bindings_set_image(struct rb_gpu_bindings *b, uint32_t binding, VkDescriptorType type,
                                VkImageView view, VkSampler sampler, VkImageLayout layout);
 /* Set the next binding (b->count): the calls' order is the binding order. */

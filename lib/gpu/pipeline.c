@@ -289,6 +289,15 @@ void rb_gpu_bind_buffer(struct rb_gpu_bindings *b, VkDescriptorType type,
     rb_gpu_bindings_set_buffer(b, b->count, type, buf);
 }
 
+void rb_gpu_bindings_set_buffer_range(struct rb_gpu_bindings *b, uint32_t binding,
+                                      VkDescriptorType type, const struct rb_gpu_buffer *buf,
+                                      VkDeviceSize offset_bytes, VkDeviceSize range_bytes)
+{
+    rb_gpu_bindings_set_buffer(b, binding, type, buf);
+    b->buffers[binding].offset = offset_bytes;
+    b->buffers[binding].range = range_bytes;
+}
+
 void rb_gpu_bind_image(struct rb_gpu_bindings *b, VkDescriptorType type, VkImageView view,
                        VkSampler sampler, VkImageLayout layout)
 {

@@ -353,6 +353,61 @@ static enum rb_status upload_env(struct rb_gpu *gpu, const struct rb_integrator_
     return st;
 }
 
+/* The device limits the frame's sizes must respect, checked before anything is allocated: the
+ * readback (one buffer the host reads, bound by the output pass in aligned bands of rows), the
+ * scene's storage buffers (bound whole by animate, gbuffer and shadow) and every dispatch's
+ * workgroup counts. The workgroup sizes are the local sizes of shaders/output.comp and
+ * direct.comp (8 x 8 pixels) and animate.comp (64 vertices of one instance). */
+static enum rb_status check_limits(const struct rb_gpu *gpu, const struct rb_scene *scene,
+                                   const struct rb_scene_pose *pose, uint32_t w, uint32_t h,
+                                   struct rb_err *err)
+{
+    VkDeviceSize row_bytes = (VkDeviceSize)w * RB_OUT_FLOATS * sizeof(float);
+    enum rb_status st = rb_gpu_check_buffer_size(gpu, "output", "readback", row_bytes * h, err);
+    if (st == RB_OK)
+        st = rb_gpu_check_storage_bands(gpu, "output", "readback", row_bytes, h, err);
+    uint32_t band_rows = rb_gpu_storage_band_rows(gpu, row_bytes, h);
+    if (st == RB_OK)
+        st = rb_gpu_check_dispatch(gpu, "output", (w + 7) / 8, (band_rows + 7) / 8, 1, err);
+    if (st == RB_OK)
+        st = rb_gpu_check_dispatch(gpu, "direct", (w + 7) / 8, (h + 7) / 8, 1, err);
+    if (st) {
+        rb_err_prefix(err, "resolution %ux%u", w, h);
+        return st;
+    }
+
+    uint64_t world_vertices = 0;
+    uint32_t most_vertices = 0;
+    for (uint32_t i = 0; i < pose->instance_count; i++) {
+        uint32_t n = scene->primitives[pose->instances[i].primitive].vertex_count;
+        world_vertices += n;
+        most_vertices = n > most_vertices ? n : most_vertices;
+    }
+    const struct {
+        const char *pass, *name;
+        VkDeviceSize bytes;
+    } bound[] = {
+        {"animate", "vertices.source",
+         (VkDeviceSize)scene->vertex_count * sizeof(struct rb_scene_vertex)},
+        {"animate", "morph.deltas",
+         (VkDeviceSize)scene->morph_delta_count * sizeof(struct rb_scene_morph_delta)},
+        {"animate", "instances",
+         (VkDeviceSize)pose->instance_count * sizeof(struct rb_gpu_instance)},
+        {"animate", "joints", (VkDeviceSize)pose->joint_matrix_count * sizeof(struct rb_mat4)},
+        {"animate", "weights", (VkDeviceSize)pose->morph_weight_count * sizeof(float)},
+        {"animate", "vertices.world", world_vertices * sizeof(struct rb_gpu_vertex)},
+        {"gbuffer", "materials",
+         (VkDeviceSize)scene->material_count * sizeof(struct rb_gpu_material)},
+    };
+    for (size_t i = 0; i < sizeof(bound) / sizeof(bound[0]) && st == RB_OK; i++)
+        st = rb_gpu_check_storage_range(gpu, bound[i].pass, bound[i].name, bound[i].bytes, err);
+    if (st == RB_OK)
+        st = rb_gpu_check_dispatch(gpu, "animate", (most_vertices + 63) / 64, 1, 1, err);
+    if (st)
+        rb_err_prefix(err, "scene '%s'", scene->path ? scene->path : "?");
+    return st;
+}
+
 enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc *desc,
                              const struct rb_moment *first, uint32_t slot_count,
                              struct rb_frame *frame, struct rb_err *err)
@@ -368,9 +423,10 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
         return rb_errf(err, RB_E_NOMEM, "out of memory for %u frame slots", slot_count);
     frame->slot_count = slot_count;
 
-    enum rb_status st =
-        make_buffer(gpu, sizeof(struct rb_gpu_globals), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true,
-                    "globals", &frame->globals, err);
+    enum rb_status st = check_limits(gpu, scene, first->pose, w, h, err);
+    if (st == RB_OK)
+        st = make_buffer(gpu, sizeof(struct rb_gpu_globals), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                         true, "globals", &frame->globals, err);
     if (st == RB_OK)
         st = upload_geometry(gpu, scene, first->pose, frame, err);
     if (st == RB_OK)

@@ -13,6 +13,11 @@ struct rb_pass_output {
     struct rb_gpu_buffer nonfinite; /* one uint32, host-visible: zeroed, then added to */
 };
 
+/* The push constants of shaders/output.comp: the band of rows one dispatch writes. */
+struct band {
+    uint32_t first_row, row_count;
+};
+
 static const struct rb_pass_binding bindings[] = {
     RB_PASS_BIND(RB_BIND_OUTPUT_GLOBALS, UNIFORM_BUFFER),
     RB_PASS_BIND(RB_BIND_OUTPUT_BEAUTY, STORAGE_IMAGE),
@@ -46,6 +51,7 @@ enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output *
             gpu,
             &(struct rb_pass_compute_desc){.name = "output",
                                            RB_PASS_BINDINGS(bindings),
+                                           .push_bytes = sizeof(struct band),
                                            .spv = rb_spv_output_comp,
                                            .spv_bytes = sizeof(rb_spv_output_comp)},
             &p->pass, err);
@@ -60,20 +66,6 @@ enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output *
 void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
                            const struct rb_frame *frame)
 {
-    struct rb_pass_bindings b = {.pass = &p->pass};
-    rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_GLOBALS, &frame->globals);
-    rb_pass_bind_image(&b, RB_BIND_OUTPUT_BEAUTY, frame->beauty->view, VK_NULL_HANDLE);
-    rb_pass_bind_image(&b, RB_BIND_OUTPUT_DIRECT, frame->direct.view, VK_NULL_HANDLE);
-    rb_pass_bind_image(&b, RB_BIND_OUTPUT_ALBEDO, frame->gbuffer[RB_GB_ALBEDO].view,
-                       VK_NULL_HANDLE);
-    rb_pass_bind_image(&b, RB_BIND_OUTPUT_NORMAL, frame->gbuffer[RB_GB_NORMAL].view,
-                       VK_NULL_HANDLE);
-    rb_pass_bind_image(&b, RB_BIND_OUTPUT_POSITION, frame->gbuffer[RB_GB_POSITION].view,
-                       VK_NULL_HANDLE);
-    rb_pass_bind_image(&b, RB_BIND_OUTPUT_MOTION, frame->gbuffer[RB_GB_MOTION].view,
-                       VK_NULL_HANDLE);
-    rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_READBACK, &frame->readback);
-    rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_NONFINITE, &p->nonfinite);
     /* The count starts from zero on the device, ordered before the shader's atomic adds. */
     vkCmdFillBuffer(cmd, p->nonfinite.buffer, 0, VK_WHOLE_SIZE, 0);
     VkMemoryBarrier2 zeroed = {
@@ -86,8 +78,36 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
     vkCmdPipelineBarrier2(cmd, &(VkDependencyInfo){.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
                                                    .memoryBarrierCount = 1,
                                                    .pMemoryBarriers = &zeroed});
-    rb_pass_record_bindings(cmd, &b);
-    vkCmdDispatch(cmd, (frame->width_px + 7) / 8, (frame->height_px + 7) / 8, 1);
+    /* The readback outgrows maxStorageBufferRange (1920x1080 is 166 MB, lavapipe binds 128 MiB):
+     * it is written one band of rows at a time, each bound as its own aligned range, so the host
+     * still reads one buffer, rows top to bottom. rb_frame_init checked that a band fits. */
+    VkDeviceSize row_bytes = (VkDeviceSize)frame->width_px * RB_OUT_FLOATS * sizeof(float);
+    uint32_t band_rows = rb_gpu_storage_band_rows(p->gpu, row_bytes, frame->height_px);
+    if (band_rows == 0)
+        RB_BUG("readback rows of %llu bytes fit no storage binding", (unsigned long long)row_bytes);
+    for (uint32_t first = 0; first < frame->height_px; first += band_rows) {
+        uint32_t rows = frame->height_px - first;
+        struct band band = {first, rows < band_rows ? rows : band_rows};
+        struct rb_pass_bindings b = {.pass = &p->pass};
+        rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_GLOBALS, &frame->globals);
+        rb_pass_bind_image(&b, RB_BIND_OUTPUT_BEAUTY, frame->beauty->view, VK_NULL_HANDLE);
+        rb_pass_bind_image(&b, RB_BIND_OUTPUT_DIRECT, frame->direct.view, VK_NULL_HANDLE);
+        rb_pass_bind_image(&b, RB_BIND_OUTPUT_ALBEDO, frame->gbuffer[RB_GB_ALBEDO].view,
+                           VK_NULL_HANDLE);
+        rb_pass_bind_image(&b, RB_BIND_OUTPUT_NORMAL, frame->gbuffer[RB_GB_NORMAL].view,
+                           VK_NULL_HANDLE);
+        rb_pass_bind_image(&b, RB_BIND_OUTPUT_POSITION, frame->gbuffer[RB_GB_POSITION].view,
+                           VK_NULL_HANDLE);
+        rb_pass_bind_image(&b, RB_BIND_OUTPUT_MOTION, frame->gbuffer[RB_GB_MOTION].view,
+                           VK_NULL_HANDLE);
+        rb_pass_bind_buffer_range(&b, RB_BIND_OUTPUT_READBACK, &frame->readback, first * row_bytes,
+                                  band.row_count * row_bytes);
+        rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_NONFINITE, &p->nonfinite);
+        rb_pass_record_bindings(cmd, &b);
+        vkCmdPushConstants(cmd, p->pass.layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0,
+                           sizeof(band), &band);
+        vkCmdDispatch(cmd, (frame->width_px + 7) / 8, (band.row_count + 7) / 8, 1);
+    }
     /* Make the shader writes visible to the host's read after the fence. */
     VkMemoryBarrier2 mb = {
         .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,

@@ -101,6 +101,16 @@ void rb_pass_bind_buffer(struct rb_pass_bindings *b, uint32_t binding,
     rb_gpu_bindings_set_buffer(&b->set, binding, type, buf);
 }
 
+void rb_pass_bind_buffer_range(struct rb_pass_bindings *b, uint32_t binding,
+                               const struct rb_gpu_buffer *buf, VkDeviceSize offset_bytes,
+                               VkDeviceSize range_bytes)
+{
+    VkDescriptorType type = binding_type(b, binding);
+    if (!is_buffer(type))
+        RB_BUG("pass '%s': %s is not a buffer", b->pass->name, b->pass->bindings[binding].name);
+    rb_gpu_bindings_set_buffer_range(&b->set, binding, type, buf, offset_bytes, range_bytes);
+}
+
 void rb_pass_bind_image(struct rb_pass_bindings *b, uint32_t binding, VkImageView view,
                         VkSampler sampler)
 {

@@ -83,6 +83,10 @@ void rb_pass_bind_buffer(struct rb_pass_bindings *b, uint32_t binding,
                          const struct rb_gpu_buffer *buf);
 void rb_pass_bind_image(struct rb_pass_bindings *b, uint32_t binding, VkImageView view,
                         VkSampler sampler);
+/* Binds range_bytes of a buffer from offset_bytes (a band of one larger than a binding). */
+void rb_pass_bind_buffer_range(struct rb_pass_bindings *b, uint32_t binding,
+                               const struct rb_gpu_buffer *buf, VkDeviceSize offset_bytes,
+                               VkDeviceSize range_bytes);
 
 /* Binds the pass's pipeline and pushes b, which must set every binding of the table: one left
  * unset is a bug (RB_BUG, naming it). */
