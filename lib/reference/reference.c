@@ -16,7 +16,8 @@
  * - Light transport (trace.c): path tracing with next-event estimation; MIS with the power
  *   heuristic (beta 2) between BSDF sampling and emitter/environment sampling; one-sample MIS
  *   over the two BRDF lobes; Russian roulette after rr_depth bounces, survival = the
- *   throughput's largest component clamped to [0.05, 0.95].
+ *   throughput's largest component clamped to [0.05, 0.95]. Rays leave from a point moved off
+ *   the surface, and shadow rays are aimed from that point (emitter samples measured from it).
  * - Path spaces: FULL counts every path up to max_bounces bounces past the first hit. DIRECT is
  *   the direct integrator's: emission at x1, punctual lights at x1 (exact visibility), the
  *   environment on camera misses; it draws no random numbers, so its samples after the first are

@@ -4,7 +4,8 @@
  * roulette); the environment map (lookup, importance sampling); the direct path space against
  * closed forms (point light with a range, spot and directional lights, shadows, single-sided
  * culling for camera rays only, alpha masks, textures, normal maps, KHR_materials_specular,
- * back faces); skins, morph targets and motion vectors; the path spaces against each other;
+ * back faces); area lights against Lambert's polygon formula (a ceiling beside its light
+ * panel); skins, morph targets and motion vectors; the path spaces against each other;
  * determinism across thread counts and runs; 1/sqrt(spp) convergence; passes and callbacks. */
 #include "reference/reference.h"
 
@@ -1063,6 +1064,141 @@ static void test_direct_spot_directional(void **state)
                  l, 2);
 }
 
+/* ---- area lights against Lambert's polygon formula ------------------------------------------ */
+
+/* The irradiance at x (unit normal n) from a polygon (count corners, 3 doubles each) of
+ * uniform radiance L wholly above x's horizon, in closed form (Lambert 1760):
+ * E = L/2 sum_i angle(v_i, v_i+1) (n . unit(v_i x v_i+1)), with v_i = P_i - x; the winding
+ * sets the sign, hence the absolute value. */
+static double polygon_irradiance(const double *poly, int count, const double x[3],
+                                 const double n[3], double radiance)
+{
+    double sum = 0.0;
+    for (int i = 0; i < count; i++) {
+        const double *a = poly + 3 * i, *b = poly + 3 * ((i + 1) % count);
+        double va[3] = {a[0] - x[0], a[1] - x[1], a[2] - x[2]};
+        double vb[3] = {b[0] - x[0], b[1] - x[1], b[2] - x[2]};
+        double c[3] = {va[1] * vb[2] - va[2] * vb[1], va[2] * vb[0] - va[0] * vb[2],
+                       va[0] * vb[1] - va[1] * vb[0]};
+        double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        double dot = va[0] * vb[0] + va[1] * vb[1] + va[2] * vb[2];
+        if (len > 0.0) /* atan2: accurate for small angles too, unlike acos */
+            sum += atan2(len, dot) * (n[0] * c[0] + n[1] * c[1] + n[2] * c[2]) / len;
+    }
+    return 0.5 * radiance * fabs(sum);
+}
+
+static struct rb_scene_material lambert(float albedo)
+{
+    struct rb_scene_material m = material(albedo, albedo, albedo, 0, 1);
+    m.specular_factor = 0.0f; /* pure Lambert */
+    return m;
+}
+
+/* An emitter of radiance le that reflects nothing. */
+static struct rb_scene_material lamp(float le)
+{
+    struct rb_scene_material m = lambert(0.0f);
+    m.emissive[0] = m.emissive[1] = m.emissive[2] = le;
+    return m;
+}
+
+/* As the Cornell box's: a Lambertian ceiling (albedo 0.8, 3 x 3 m, facing down) at y = 1 and an
+ * emissive panel (0.7 x 0.6 m, radiance 5, black) hung CEIL_GAP below it; panel gets the
+ * panel's corners as the renderer stores them. */
+#define CEIL_Y 1.0f
+#define CEIL_GAP 0.02f
+#define PANEL_HX 0.35f
+#define PANEL_HZ 0.3f
+#define PANEL_LE 5.0f
+static struct rb_scene *ceiling_scene(double panel[4][3])
+{
+    struct rb_scene *s = scene_new();
+    add_quad(s, rb_v3(0, CEIL_Y, 0), rb_v3(1.5f, 0, 0), rb_v3(0, 0, 1.5f),
+             add_material(s, lambert(0.8f)));
+    add_quad(s, rb_v3(0, CEIL_Y - CEIL_GAP, 0), rb_v3(PANEL_HX, 0, 0), rb_v3(0, 0, PANEL_HZ),
+             add_material(s, lamp(PANEL_LE)));
+    scene_finish(s);
+    static const float sx[4] = {-1, 1, 1, -1}, sz[4] = {-1, -1, 1, 1};
+    for (int i = 0; i < 4; i++) {
+        panel[i][0] = sx[i] * PANEL_HX;
+        panel[i][1] = CEIL_Y - CEIL_GAP;
+        panel[i][2] = sz[i] * PANEL_HZ;
+    }
+    return s;
+}
+
+/* The ceiling's radiance (0.8 / pi x E) at every pixel that sees it, seen from below beside the
+ * panel, against the closed form. Shadow rays from there toward the panel run nearly parallel
+ * to it: one aimed from the surface point but started off the surface passes the panel's plane
+ * before its end, and the panel shadows its own light. Only direct light (max_bounces 0): the
+ * ceiling is flat and the panel black, so there is no other. */
+static void test_area_light_ceiling(void **state)
+{
+    (void)state;
+    double panel[4][3];
+    struct rb_scene *s = ceiling_scene(panel);
+    struct rb_job *job = job_new(
+        "resolution: [32, 24]\n"
+        "frames: {start: 0, end: 0, rate: 24}\n"
+        "camera: {fov_y_deg: 40, keys: [{t: 0, position: [0, 0, 1.2], look_at: [0, 1, 0]}]}\n"
+        "lights: [{type: point, position: [0, -50, 0], intensity: 0}]\n"
+        "integrator: {name: reference, reference: {spp: 128, max_bounces: 0}}\n");
+    struct rb_reference *ref = ref_new(job, s, 2);
+    struct stats st;
+    frame_stats(ref, 16, &st);
+    const double down[3] = {0, -1, 0};
+    uint32_t checked = 0, near = 0, off = 0, on_panel = 0, low_x = 0, low_y = 0;
+    double ratio_sum = 0.0, low = INFINITY, low_m = 0.0, low_want = 0.0;
+    for (uint32_t y = 0; y < st.r.height_px; y++)
+        for (uint32_t x = 0; x < st.r.width_px; x++) {
+            struct rb_vec3 o, d;
+            pixel_ray(&st.r, x, y, &o, &d);
+            const float *p = px_at(st.first, &st.r, x, y);
+            size_t i = ((size_t)y * st.r.width_px + x) * 3;
+            if (!(d.y > 0.0f))
+                continue;
+            /* where the ray crosses the panel's plane, then the ceiling */
+            double tp = (panel[0][1] - o.y) / d.y, tc = (CEIL_Y - o.y) / d.y;
+            double px = o.x + tp * d.x, pz = o.z + tp * d.z;
+            double h[3] = {o.x + tc * d.x, CEIL_Y, o.z + tc * d.z};
+            double edge = fmax(fabs(px) - PANEL_HX, fabs(pz) - PANEL_HZ);
+            if (edge < -1e-3) { /* the panel itself */
+                for (int c = 0; c < 3; c++)
+                    assert_true(p[RB_OUT_BEAUTY + c] == PANEL_LE);
+                on_panel++;
+                continue;
+            }
+            if (edge < 1e-3 || fmax(fabs(h[0]), fabs(h[2])) > 1.5 - 1e-3)
+                continue;
+            assert_true(p[RB_OUT_BEAUTY + 3] == 1.0f);
+            double want = 0.8 / PI_D * polygon_irradiance(&panel[0][0], 4, h, down, PANEL_LE);
+            for (int c = 0; c < 3; c++)
+                if (!(fabs(st.mean[i + c] - want) <= 5.0 * st.sem[i + c] + 0.03 * want))
+                    off++;
+            double ratio = st.mean[i] / want;
+            ratio_sum += ratio;
+            if (ratio < low)
+                low = ratio, low_m = st.mean[i], low_want = want, low_x = x, low_y = y;
+            checked++;
+            if (fmax(fabs(h[0]) - PANEL_HX, fabs(h[2]) - PANEL_HZ) < 0.1)
+                near++;
+        }
+    double mean_ratio = ratio_sum / checked;
+    print_message("# ceiling beside the panel: %u pixels, mean ratio to the closed form %.4f, "
+                  "lowest %.3f\n",
+                  checked, mean_ratio, low);
+    if (off || !(fabs(mean_ratio - 1.0) < 0.01) || checked < 300 || near < 20 || on_panel < 50)
+        fail_msg("%u of %u ceiling pixels (%u within 0.1 m of the panel) off the closed form by "
+                 "more than 5 standard errors + 3%%; mean ratio %g; lowest %g at pixel %u,%u "
+                 "(%g, want %g); %u panel pixels",
+                 off / 3, checked, near, mean_ratio, low, low_x, low_y, low_m, low_want, on_panel);
+    stats_release(&st);
+    rb_reference_destroy(ref);
+    rb_job_destroy(job);
+    rb_scene_destroy(s);
+}
+
 /* ---- materials, textures, back faces and skins (DIRECT: no noise) ---------------------------- */
 
 static double srgb(uint8_t c)
@@ -1722,6 +1858,7 @@ int main(void)
         cmocka_unit_test(test_environment_map),
         cmocka_unit_test(test_direct_point),
         cmocka_unit_test(test_direct_spot_directional),
+        cmocka_unit_test(test_area_light_ceiling),
         cmocka_unit_test(test_materials),
         cmocka_unit_test(test_skin),
         cmocka_unit_test(test_motion_and_morph),
