@@ -28,9 +28,14 @@
  *   environment on camera misses; indirect = the rest; beauty = direct + indirect, alpha 1 on a
  *   hit and 0 on a miss. AOVs from the first hit: albedo (c_diff), shading normal, view depth,
  *   motion (previous minus current pixel position of the same surface point).
- * Determinism: random numbers are a hash of (frame, pixel, sample, dimension) (sample.c); each
- * pixel's samples are summed in sample order in double by whichever thread owns its row, so the
- * bits do not depend on the thread count. Samples come in passes of 1, 1, 2, 4, 8, then 16. */
+ * Samples (sample.c): a pixel's samples are Owen-scrambled Sobol (0,2)-sequences in pairs of
+ * dimensions (each vertex's BSDF direction, emitter point, environment direction), padded with
+ * independent seeds per frame, pixel and pair; the error falls faster than 1/sqrt(spp) where a
+ * pair's integrand is smooth. RB_REFERENCE_SAMPLER_HASH gives independent hashed numbers
+ * instead (plain Monte Carlo), for comparisons.
+ * Determinism: every number is a function of (frame, pixel, sample, dimension); each pixel's
+ * samples are summed in sample order in double by whichever thread owns its row, so the bits
+ * do not depend on the thread count. Samples come in passes of 1, 1, 2, 4, 8, then 16. */
 #include "reference/reference_int.h"
 
 #include <math.h>
@@ -53,6 +58,7 @@ struct rb_reference {
     const struct rb_job *job;
     const struct rb_scene *scene;
     uint32_t thread_count;
+    bool is_hashed_sampler;
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
     void *user;
 
@@ -262,6 +268,7 @@ enum rb_status rb_reference_create(const struct rb_reference_desc *desc, struct 
     ref->scene = desc->scene;
     ref->on_pass = desc->on_pass;
     ref->user = desc->user;
+    ref->is_hashed_sampler = desc->sampler == RB_REFERENCE_SAMPLER_HASH;
     uint32_t threads = desc->thread_count;
     if (threads == 0) {
         long n = sysconf(_SC_NPROCESSORS_ONLN);
@@ -491,6 +498,7 @@ static enum rb_status prepare_frame(struct rb_reference *ref, int frame, double 
     w->max_bounces = job->integrator.reference.max_bounces;
     w->rr_depth = job->integrator.reference.rr_depth;
     w->frame = (uint32_t)frame;
+    w->is_hashed_sampler = ref->is_hashed_sampler;
     return RB_OK;
 }
 
@@ -572,9 +580,11 @@ static void trace_pixel(struct rb_reference *ref, size_t i, uint32_t s0, uint32_
         return;
     }
     for (uint32_t s = s0; s < s1; s++) {
+        struct rb_ref_rng rng;
+        rb_ref_rng_init(&rng, ref->is_hashed_sampler, ref->world.frame, (uint32_t)i, s);
         float direct[3] = {0, 0, 0}, indirect[3] = {0, 0, 0};
-        rb_ref_trace_sample(&ref->world, hit, ref->primary_dir + i * 3, (uint32_t)i, s, direct,
-                            indirect, rays);
+        rb_ref_trace_sample(&ref->world, hit, ref->primary_dir + i * 3, &rng, direct, indirect,
+                            rays);
         for (int c = 0; c < 3; c++) {
             acc[c] += direct[c];
             acc[3 + c] += indirect[c];

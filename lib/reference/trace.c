@@ -8,17 +8,15 @@
 
 #include <math.h>
 
-/* Random dimensions: a block per path vertex. */
+/* Random dimensions: a block per path vertex, after the camera's. Even offsets start 2D pairs
+ * (sample.c): the three 2D integrals get one each, the 1D choices share the rest. */
 enum {
-    DIM_LOBE,
-    DIM_DIR0,
-    DIM_DIR1,
-    DIM_RR,
-    DIM_EMIT_PICK,
-    DIM_EMIT_U,
-    DIM_EMIT_V,
-    DIM_ENV_U,
-    DIM_ENV_V,
+    DIM_DIR = 0,     /* and 1: the BSDF sample's direction */
+    DIM_EMIT_UV = 2, /* and 3: the point on the emissive triangle */
+    DIM_ENV_UV = 4,  /* and 5: the environment's direction */
+    DIM_LOBE = 6,
+    DIM_EMIT_PICK = 7,
+    DIM_RR = 8,
     DIMS_PER_VERTEX = 16
 };
 
@@ -162,11 +160,13 @@ static float face_cos(const struct rb_ref_world *w, uint32_t prim, const float l
  * distance and pdf are measured from the shadow ray's origin off the surface, as the BSDF
  * samples' hits are (their distance is from the same origin), so the two MIS weights agree. */
 static void nee_area(const struct rb_ref_world *w, const struct rb_ref_surface *s,
-                     const struct rb_ref_bsdf *b, const float beta[3], float acc[3], uint64_t key,
-                     uint32_t dim, uint64_t *rays)
+                     const struct rb_ref_bsdf *b, const float beta[3], float acc[3],
+                     const struct rb_ref_rng *rng, uint32_t dim, uint64_t *rays)
 {
-    uint32_t prim = pick_emitter(w, rb_ref_rand(key, dim + DIM_EMIT_PICK));
-    float su = sqrtf(rb_ref_rand(key, dim + DIM_EMIT_U)), r = rb_ref_rand(key, dim + DIM_EMIT_V);
+    uint32_t prim = pick_emitter(w, rb_ref_rand(rng, dim + DIM_EMIT_PICK));
+    float uv[2];
+    rb_ref_rand2(rng, dim + DIM_EMIT_UV, uv);
+    float su = sqrtf(uv[0]), r = uv[1];
     float bu = su * (1.0f - r), bv = su * r;
     float q[3], org[3];
     rb_ref_hit_point(w, prim, bu, bv, q);
@@ -207,12 +207,12 @@ static void nee_area(const struct rb_ref_world *w, const struct rb_ref_surface *
 /* The environment is at infinity: a shadow ray along l from anywhere near the surface aims at
  * the same light. */
 static void nee_env(const struct rb_ref_world *w, const struct rb_ref_surface *s,
-                    const struct rb_ref_bsdf *b, const float beta[3], float acc[3], uint64_t key,
-                    uint32_t dim, uint64_t *rays)
+                    const struct rb_ref_bsdf *b, const float beta[3], float acc[3],
+                    const struct rb_ref_rng *rng, uint32_t dim, uint64_t *rays)
 {
-    float l[3];
-    float pdf = rb_ref_env_sample(w->env, s->n, rb_ref_rand(key, dim + DIM_ENV_U),
-                                  rb_ref_rand(key, dim + DIM_ENV_V), l);
+    float l[3], u[2];
+    rb_ref_rand2(rng, dim + DIM_ENV_UV, u);
+    float pdf = rb_ref_env_sample(w->env, s->n, u[0], u[1], l);
     if (!(pdf > 0.0f))
         return;
     float f[3], le[3];
@@ -231,10 +231,9 @@ static void nee_env(const struct rb_ref_world *w, const struct rb_ref_surface *s
 }
 
 void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
-                         const float dir0[3], uint32_t pixel, uint32_t sample, float direct[3],
+                         const float dir0[3], const struct rb_ref_rng *rng, float direct[3],
                          float indirect[3], uint64_t *rays)
 {
-    uint64_t key = rb_ref_rand_key(w->frame, pixel, sample);
     struct rb_ref_surface s;
     rb_ref_surface_eval(w, hit->prim, hit->u, hit->v, dir0, &s);
     for (int i = 0; i < 3; i++)
@@ -255,25 +254,24 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
         bool do_area = has_area;
         bool do_env = has_env && (w->paths == RB_PATHS_FULL || k == 1);
         bool do_continue = k <= bounces;
-        uint32_t dim = k * DIMS_PER_VERTEX;
+        uint32_t dim = RB_REF_DIM_CAMERA_END + (k - 1) * DIMS_PER_VERTEX;
         float v[3] = {-dir[0], -dir[1], -dir[2]};
         struct rb_ref_bsdf b;
         rb_ref_bsdf_init(&b, &s, v);
 
         nee_punctual(w, &s, &b, beta, acc, rays);
         if (do_area)
-            nee_area(w, &s, &b, beta, acc, key, dim, rays);
+            nee_area(w, &s, &b, beta, acc, rng, dim, rays);
         if (do_env)
-            nee_env(w, &s, &b, beta, acc, key, dim, rays);
+            nee_env(w, &s, &b, beta, acc, rng, dim, rays);
         if (!do_continue && !do_area && !do_env)
             break;
 
         /* The BSDF sample: it finds emitters and the environment (MIS'd against the light
          * samples above) and, where allowed, the next vertex. */
-        float l[3], weight[3];
-        float pdf = rb_ref_bsdf_sample(&b, rb_ref_rand(key, dim + DIM_LOBE),
-                                       rb_ref_rand(key, dim + DIM_DIR0),
-                                       rb_ref_rand(key, dim + DIM_DIR1), l, weight);
+        float l[3], weight[3], u[2];
+        rb_ref_rand2(rng, dim + DIM_DIR, u);
+        float pdf = rb_ref_bsdf_sample(&b, rb_ref_rand(rng, dim + DIM_LOBE), u[0], u[1], l, weight);
         if (!(pdf > 0.0f) || is_black(weight))
             break;
         float org[3];
@@ -306,7 +304,7 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
             beta[i] *= weight[i];
         if (k > w->rr_depth) {
             float q = rb_clampf(rb_ref_maxf(beta[0], rb_ref_maxf(beta[1], beta[2])), 0.05f, 0.95f);
-            if (rb_ref_rand(key, dim + DIM_RR) >= q)
+            if (rb_ref_rand(rng, dim + DIM_RR) >= q)
                 break;
             for (int i = 0; i < 3; i++)
                 beta[i] /= q;

@@ -6,7 +6,8 @@
  * culling for camera rays only, alpha masks, textures, normal maps, KHR_materials_specular,
  * back faces); area lights against Lambert's polygon formula (a ceiling beside its light
  * panel); skins, morph targets and motion vectors; the path spaces against each other;
- * determinism across thread counts and runs; 1/sqrt(spp) convergence; passes and callbacks. */
+ * determinism across thread counts and runs; convergence (1/sqrt(spp) with hashed numbers,
+ * faster with the Sobol sampler); passes and callbacks. */
 #include "reference/reference.h"
 
 #include <math.h>
@@ -203,16 +204,23 @@ static struct rb_job *job_new(const char *fmt, ...)
     return job;
 }
 
-static struct rb_reference *ref_new(const struct rb_job *job, const struct rb_scene *scene,
-                                    uint32_t threads)
+static struct rb_reference *ref_new_sampler(const struct rb_job *job, const struct rb_scene *scene,
+                                            uint32_t threads, enum rb_reference_sampler sampler)
 {
     struct rb_reference *ref = NULL;
     struct rb_err err = RB_ERR_INIT;
     if (rb_reference_create(
-            &(struct rb_reference_desc){.job = job, .scene = scene, .thread_count = threads}, &ref,
-            &err))
+            &(struct rb_reference_desc){
+                .job = job, .scene = scene, .thread_count = threads, .sampler = sampler},
+            &ref, &err))
         fail_msg("reference: %s", err.msg);
     return ref;
+}
+
+static struct rb_reference *ref_new(const struct rb_job *job, const struct rb_scene *scene,
+                                    uint32_t threads)
+{
+    return ref_new_sampler(job, scene, threads, RB_REFERENCE_SAMPLER_DEFAULT);
 }
 
 /* Renders frame and returns a copy of the pixels (free it). */
@@ -336,6 +344,23 @@ static void test_random(void **state)
         if (!(chi < 40.0))
             fail_msg("input %d alone: chi-square %g", which, chi);
     }
+    /* Dimensions 2k and 2k + 1 of one pixel's samples are a (0,2)-sequence: every aligned run
+     * of 16 samples puts exactly one point in each cell of the 16 x 1, 8 x 2, ..., 1 x 16 grids. */
+    for (uint32_t pair = 0; pair < 8; pair++)
+        for (uint32_t s0 = 0; s0 < 64; s0 += 16)
+            for (int a = 0; a <= 4; a++) {
+                uint32_t cells[16] = {0};
+                for (uint32_t s = s0; s < s0 + 16; s++) {
+                    float u = rb_reference_random(3, 77, s, 2 * pair);
+                    float v = rb_reference_random(3, 77, s, 2 * pair + 1);
+                    cells[(int)(u * (float)(1 << a)) * (1 << (4 - a)) +
+                          (int)(v * (float)(1 << (4 - a)))]++;
+                }
+                for (int c = 0; c < 16; c++)
+                    if (cells[c] != 1)
+                        fail_msg("pair %u, samples %u-%u, %d x %d grid: cell %d has %u points",
+                                 pair, s0, s0 + 15, 1 << a, 1 << (4 - a), c, cells[c]);
+            }
     /* Every input changes the number. */
     for (uint32_t i = 0; i < 1000; i++) {
         uint32_t a[4] = {i % 7, i * 31 + 5, i % 64, i % 40};
@@ -632,8 +657,11 @@ static void test_ggx_furnace(void **state)
             for (int c = 0; c < 3; c++) {
                 double m = st.mean[i + c], sem = st.sem[i + c];
                 /* Single scattering is all a convex sphere gets: no more than E(mu), no more
-                 * lost than the facets' cut (light from under the triangle's plane). */
-                if (!(m >= e_cut - 4.0 * sem && m <= 1.0 + 4.0 * sem && m <= e + 4.0 * sem + 1e-4))
+                 * lost than the facets' cut (light from under the triangle's plane). The 1e-4
+                 * is single precision: at alpha 1e-4 the GGX peak gives rare outliers of a few
+                 * 1e-4 that 16 frames cannot put a standard error on. */
+                if (!(m >= e_cut - 4.0 * sem && m <= 1.0 + 4.0 * sem + 1e-4 &&
+                      m <= e + 4.0 * sem + 1e-4))
                     fail_msg("roughness %g, pixel %u (mu %.3f): %g +- %g, E(mu) %g, with the "
                              "facet cut %g",
                              roughness[ri], x, mu, m, sem, e, e_cut);
@@ -1649,13 +1677,19 @@ static double rmse(const float *a, const float *b, const struct rb_reference_res
     return sqrt(sum / (3.0 * n));
 }
 
+/* With independent (hashed) random numbers the reference is plain Monte Carlo, whose error
+ * falls as 1/sqrt(spp) on any integrand: this checks that the samples are independent and the
+ * estimator's variance finite, on a scene with every kind of light and path. */
 static void test_convergence(void **state)
 {
     (void)state;
     struct rb_scene *s = busy_scene();
     struct rb_job *j16 = job_new(BUSY_JOB, 24, 24, 16), *j64 = job_new(BUSY_JOB, 24, 24, 64);
     struct rb_job *j1k = job_new(BUSY_JOB, 24, 24, 1024);
-    struct rb_reference *a = ref_new(j16, s, 2), *b = ref_new(j64, s, 2), *c = ref_new(j1k, s, 2);
+    const enum rb_reference_sampler hash = RB_REFERENCE_SAMPLER_HASH;
+    struct rb_reference *a = ref_new_sampler(j16, s, 2, hash),
+                        *b = ref_new_sampler(j64, s, 2, hash),
+                        *c = ref_new_sampler(j1k, s, 2, hash);
     struct rb_reference_result r16, r64, r1k;
     /* The reference is frame 1, whose random numbers are independent of frame 0's, so
      * E[RMSE^2] = s^2 (1/n + 1/1024): the expected ratio is sqrt((1/64 + 1/1024) /
@@ -1663,6 +1697,7 @@ static void test_convergence(void **state)
     float *p16 = render(a, 0, &r16), *p64 = render(b, 0, &r64), *p1k = render(c, 1, &r1k);
     double e16 = rmse(p16, p1k, &r16), e64 = rmse(p64, p1k, &r64);
     double ratio = e64 / e16;
+    print_message("# hashed numbers: RMSE(64) / RMSE(16) = %.4g / %.4g = %.3f\n", e64, e16, ratio);
     if (!(ratio > 0.425 && ratio < 0.575))
         fail_msg("RMSE(64) / RMSE(16) = %g / %g = %g, not 0.5 +- 15%%", e64, e16, ratio);
     assert_true(e16 > 0.0);
@@ -1675,6 +1710,80 @@ static void test_convergence(void **state)
     rb_job_destroy(j1k);
     rb_job_destroy(j64);
     rb_job_destroy(j16);
+    rb_scene_destroy(s);
+}
+
+/* A floor (albedo 0.8) lit by one emissive triangle 1 m above it, nothing in between: its light
+ * is smooth in the emitter point and smooth in the BSDF direction but for the triangle's
+ * outline, each a pair of dimensions, and has a closed form. */
+static double floor_error(const struct rb_scene *s, const double tri[3][3], uint32_t spp,
+                          enum rb_reference_sampler sampler)
+{
+    struct rb_job *job = job_new(
+        "resolution: [32, 24]\n"
+        "frames: {start: 0, end: 3, rate: 24}\n"
+        "camera: {fov_y_deg: 40, keys: [{t: 0, position: [0, 0.6, 2.2], look_at: [0, 0, 0]}]}\n"
+        "lights: [{type: point, position: [0, -50, 0], intensity: 0}]\n"
+        "integrator: {name: reference, reference: {spp: %u, max_bounces: 0}}\n",
+        spp);
+    struct rb_reference *ref = ref_new_sampler(job, s, 2, sampler);
+    const double up[3] = {0, 1, 0};
+    double sum = 0.0;
+    uint32_t n = 0;
+    for (int f = 0; f < 4; f++) {
+        struct rb_reference_result r;
+        float *px = render(ref, f, &r);
+        for (uint32_t y = 0; y < r.height_px; y++)
+            for (uint32_t x = 0; x < r.width_px; x++) {
+                struct rb_vec3 o, d;
+                pixel_ray(&r, x, y, &o, &d);
+                double t = -o.y / d.y, h[3] = {o.x + t * d.x, 0.0, o.z + t * d.z};
+                if (!(t > 0.0) || fmax(fabs(h[0]), fabs(h[2])) > 1.5 - 1e-3)
+                    continue;
+                double want = 0.8 / PI_D * polygon_irradiance(&tri[0][0], 3, h, up, 5.0);
+                double e = (px_at(px, &r, x, y)[RB_OUT_BEAUTY] - want) / want;
+                sum += e * e;
+                n++;
+            }
+        free(px);
+    }
+    assert_true(n > 1500);
+    rb_reference_destroy(ref);
+    rb_job_destroy(job);
+    return sqrt(sum / n);
+}
+
+/* The Sobol sampler against plain Monte Carlo (hashed numbers) on one smooth integrand: relative
+ * RMSE against the closed form at 16 and 64 spp. Monte Carlo's falls by 1/sqrt(4) = 0.5. Under
+ * an Owen-scrambled (0,2)-sequence the variance of a 2D integrand that is smooth but for jumps
+ * along curves is O(n^-1.5) (Owen 1997; smooth everywhere: O(n^-3)), so the ratio is at most
+ * 4^-0.75 = 0.35 (0.125 for the smooth part). */
+static void test_convergence_sobol(void **state)
+{
+    (void)state;
+    struct rb_scene *s = scene_new();
+    add_quad(s, rb_v3(0, 0, 0), rb_v3(1.5f, 0, 0), rb_v3(0, 0, -1.5f),
+             add_material(s, lambert(0.8f)));
+    const double tri[3][3] = {{-0.5, 1, -0.5}, {0.5, 1, -0.5}, {0, 1, 0.5}};
+    struct rb_scene_vertex v[3];
+    for (int i = 0; i < 3; i++)
+        v[i] = vert((float)tri[i][0], (float)tri[i][1], (float)tri[i][2], 0, -1, 0, 0, 0);
+    static const uint32_t idx[3] = {0, 1, 2};
+    add_mesh(s, v, 3, idx, 3, add_material(s, lamp(5.0f)), rb_v3(0, 0, 0));
+    scene_finish(s);
+    const enum rb_reference_sampler sobol = RB_REFERENCE_SAMPLER_SOBOL,
+                                    hash = RB_REFERENCE_SAMPLER_HASH;
+    double q16 = floor_error(s, tri, 16, sobol), q64 = floor_error(s, tri, 64, sobol);
+    double h16 = floor_error(s, tri, 16, hash), h64 = floor_error(s, tri, 64, hash);
+    print_message("# relative RMSE at 16, 64 spp: sobol %.3g, %.3g (ratio %.3f); hashed %.3g, "
+                  "%.3g (ratio %.3f)\n",
+                  q16, q64, q64 / q16, h16, h64, h64 / h16);
+    if (!(h64 / h16 > 0.425 && h64 / h16 < 0.575))
+        fail_msg("hashed: RMSE(64) / RMSE(16) = %g, not 0.5 +- 15%%", h64 / h16);
+    if (!(q64 / q16 < 0.35))
+        fail_msg("sobol: RMSE(64) / RMSE(16) = %g, not below 0.35", q64 / q16);
+    if (!(q64 < 0.25 * h64 && q16 < h16))
+        fail_msg("sobol's RMSE %g, %g not below hashed %g, %g", q16, q64, h16, h64);
     rb_scene_destroy(s);
 }
 
@@ -1865,6 +1974,7 @@ int main(void)
         cmocka_unit_test(test_path_spaces),
         cmocka_unit_test(test_determinism),
         cmocka_unit_test(test_convergence),
+        cmocka_unit_test(test_convergence_sobol),
         cmocka_unit_test(test_passes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
