@@ -195,8 +195,9 @@ float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, fl
 
 /* ---- the integrator (trace.c) --------------------------------------------------------------- */
 
-/* Dimensions [0, RB_REF_DIM_CAMERA_END) of each sample are kept for the camera; the path's
- * start after them. */
+/* Dimensions [0, RB_REF_DIM_CAMERA_END) of each sample are the camera's (the pixel filter's
+ * position in the pixel); the path's start after them. */
+#define RB_REF_DIM_PIXEL 0
 #define RB_REF_DIM_CAMERA_END 16
 
 /* One sample of one pixel whose camera ray (direction dir) hit hit: adds the light of the

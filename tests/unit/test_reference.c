@@ -5,9 +5,9 @@
  * closed forms (point light with a range, spot and directional lights, shadows, single-sided
  * culling for camera rays only, alpha masks, textures, normal maps, KHR_materials_specular,
  * back faces); area lights against Lambert's polygon formula (a ceiling beside its light
- * panel); skins, morph targets and motion vectors; the path spaces against each other;
- * determinism across thread counts and runs; convergence (1/sqrt(spp) with hashed numbers,
- * faster with the Sobol sampler); passes and callbacks. */
+ * panel); skins, morph targets and motion vectors; the box pixel filter; the path spaces
+ * against each other; determinism across thread counts and runs; convergence (1/sqrt(spp) with
+ * hashed numbers, faster with the Sobol sampler); passes and callbacks. */
 #include "reference/reference.h"
 
 #include <math.h>
@@ -236,17 +236,24 @@ static float *render(struct rb_reference *ref, int frame, struct rb_reference_re
     return copy;
 }
 
-/* The camera ray through the centre of pixel (x, y), as the reference defines it. */
-static void pixel_ray(const struct rb_reference_result *r, uint32_t x, uint32_t y,
-                      struct rb_vec3 *org, struct rb_vec3 *dir)
+/* The camera ray through the point (sx, sy) of the image, in pixels (pixel x spans [x, x + 1)). */
+static void image_ray(const struct rb_reference_result *r, float sx, float sy, struct rb_vec3 *org,
+                      struct rb_vec3 *dir)
 {
     struct rb_mat4 inv = rb_mat4_inverse(&r->world_to_ndc, NULL);
     struct rb_mat4 cam = rb_mat4_inverse(&r->world_to_camera, NULL);
     *org = rb_v3(cam.m[3][0], cam.m[3][1], cam.m[3][2]);
-    struct rb_vec4 f = rb_mat4_vec4(
-        &inv, (struct rb_vec4){((float)x + 0.5f) / (float)r->width_px * 2.0f - 1.0f,
-                               ((float)y + 0.5f) / (float)r->height_px * 2.0f - 1.0f, 1, 1});
+    struct rb_vec4 f =
+        rb_mat4_vec4(&inv, (struct rb_vec4){sx / (float)r->width_px * 2.0f - 1.0f,
+                                            sy / (float)r->height_px * 2.0f - 1.0f, 1, 1});
     *dir = rb_v3_normalize(rb_v3_sub(rb_v3(f.x / f.w, f.y / f.w, f.z / f.w), *org));
+}
+
+/* The camera ray through the centre of pixel (x, y), as the reference defines it. */
+static void pixel_ray(const struct rb_reference_result *r, uint32_t x, uint32_t y,
+                      struct rb_vec3 *org, struct rb_vec3 *dir)
+{
+    image_ray(r, (float)x + 0.5f, (float)y + 0.5f, org, dir);
 }
 
 static const float *px_at(const float *pixels, const struct rb_reference_result *r, uint32_t x,
@@ -1601,6 +1608,98 @@ static void test_motion_and_morph(void **state)
     rb_scene_destroy(s);
 }
 
+/* ---- the pixel filter ----------------------------------------------------------------------- */
+
+/* A 1.2 x 0.8 m rectangle turned 30 degrees about the view axis before a uniform sky, in the
+ * direct path space (no noise on the surface): under center every sample takes the pixel
+ * centre's ray; under box each its own point of the pixel, so edge pixels are partly covered.
+ * Their alpha is checked against the coverage of a 64 x 64 grid of rays over the pixel. */
+static void test_pixel_filter(void **state)
+{
+    (void)state;
+    struct rb_scene *s = scene_new();
+    const float ang = 30.0f * RB_PI / 180.0f;
+    struct rb_vec3 u = rb_v3(0.6f * cosf(ang), 0.6f * sinf(ang), 0);
+    struct rb_vec3 v = rb_v3(-0.4f * sinf(ang), 0.4f * cosf(ang), 0);
+    add_quad(s, rb_v3(0, 0, 0), u, v, add_material(s, lambert(0.5f)));
+    scene_finish(s);
+    const char *fmt = "resolution: [32, 24]\n"
+                      "frames: {start: 0, end: 0, rate: 24}\n"
+                      "camera: {fov_y_deg: 40, keys: [{t: 0, position: [0.1, 0.2, 3], "
+                      "look_at: [0, 0, 0]}]}\n"
+                      "lights: [{type: point, position: [0.5, 0.5, 2], intensity: 2}]\n"
+                      "environment: {color: [0.2, 0.3, 0.4], intensity: 1}\n"
+                      "integrator: {name: reference, reference: {spp: 256, paths: direct%s}}\n";
+    struct rb_job *jc = job_new(fmt, ""), *jb = job_new(fmt, ", pixel_filter: box");
+    assert_int_equal(jc->integrator.reference.pixel_filter, RB_PIXEL_FILTER_CENTER);
+    assert_int_equal(jb->integrator.reference.pixel_filter, RB_PIXEL_FILTER_BOX);
+    assert_true(jc->hash != jb->hash);
+    struct rb_reference *rc = ref_new(jc, s, 2), *rb1 = ref_new(jb, s, 1);
+    struct rb_reference *rb2 = ref_new(jb, s, 2), *rb3 = ref_new(jb, s, 3);
+    struct rb_reference_result r;
+    float *pc = render(rc, 0, &r), *pb = render(rb1, 0, &r);
+    float *pb2 = render(rb2, 0, &r), *pb3 = render(rb3, 0, &r);
+    size_t n = (size_t)r.width_px * r.height_px;
+    /* deterministic whatever the threads */
+    assert_memory_equal(pb, pb2, n * RB_OUT_FLOATS * sizeof(float));
+    assert_memory_equal(pb, pb3, n * RB_OUT_FLOATS * sizeof(float));
+    float ulen = rb_v3_length(u), vlen = rb_v3_length(v);
+    struct rb_vec3 uh = rb_v3_scale(u, 1.0f / ulen), vh = rb_v3_scale(v, 1.0f / vlen);
+    uint32_t edge = 0, inside = 0, outside = 0;
+    double worst = 0.0;
+    for (uint32_t y = 0; y < r.height_px; y++)
+        for (uint32_t x = 0; x < r.width_px; x++) {
+            const float *c = px_at(pc, &r, x, y), *b = px_at(pb, &r, x, y);
+            /* the AOVs are the centre ray's under either filter */
+            assert_memory_equal(c + RB_OUT_ALBEDO, b + RB_OUT_ALBEDO,
+                                (RB_OUT_FLOATS - RB_OUT_ALBEDO) * sizeof(float));
+            assert_true(c[RB_OUT_BEAUTY + 3] == 0.0f || c[RB_OUT_BEAUTY + 3] == 1.0f);
+            enum { G = 64 };
+            uint32_t hits = 0;
+            for (int j = 0; j < G; j++)
+                for (int i = 0; i < G; i++) {
+                    struct rb_vec3 o, d;
+                    image_ray(&r, (float)x + (i + 0.5f) / G, (float)y + (j + 0.5f) / G, &o, &d);
+                    struct rb_vec3 h = rb_v3_add(o, rb_v3_scale(d, -o.z / d.z));
+                    hits += fabsf(rb_v3_dot(h, uh)) < ulen && fabsf(rb_v3_dot(h, vh)) < vlen;
+                }
+            double cover = (double)hits / (G * G), alpha = b[RB_OUT_BEAUTY + 3];
+            worst = fmax(worst, fabs(alpha - cover));
+            if (!(fabs(alpha - cover) <= 0.05))
+                fail_msg("pixel %u,%u: alpha %g, covered %g", x, y, alpha, cover);
+            if (alpha > 0.0 && alpha < 1.0) {
+                edge++;
+                continue;
+            }
+            /* wholly in or out: the same surface or sky as the centre's ray */
+            if (alpha == 1.0) {
+                assert_true(c[RB_OUT_BEAUTY + 3] == 1.0f);
+                for (int k = 0; k < 3; k++)
+                    assert_true(fabsf(b[RB_OUT_BEAUTY + k] - c[RB_OUT_BEAUTY + k]) <=
+                                0.03f * c[RB_OUT_BEAUTY + k]);
+                inside++;
+            } else {
+                assert_true(c[RB_OUT_BEAUTY + 3] == 0.0f);
+                assert_memory_equal(b, c, 10 * sizeof(float)); /* beauty, direct, indirect */
+                outside++;
+            }
+        }
+    print_message("# box filter: %u edge pixels, alpha within %.3f of the coverage\n", edge, worst);
+    if (!(edge > 40 && inside > 50 && outside > 200))
+        fail_msg("edge %u inside %u outside %u", edge, inside, outside);
+    free(pb3);
+    free(pb2);
+    free(pb);
+    free(pc);
+    rb_reference_destroy(rb3);
+    rb_reference_destroy(rb2);
+    rb_reference_destroy(rb1);
+    rb_reference_destroy(rc);
+    rb_job_destroy(jb);
+    rb_job_destroy(jc);
+    rb_scene_destroy(s);
+}
+
 /* ---- determinism, convergence, passes ------------------------------------------------------- */
 
 /* Spheres on a floor before a red wall: a point light, an emissive panel on the wall, a
@@ -1624,13 +1723,16 @@ static struct rb_scene *busy_scene(void)
     return s;
 }
 
-#define BUSY_JOB                                                                                   \
+#define BUSY_JOB_WITH(filter)                                                                      \
     "resolution: [%d, %d]\n"                                                                       \
     "frames: {start: 0, end: 1, rate: 24}\n"                                                       \
     "camera: {fov_y_deg: 50, keys: [{t: 0, position: [0.3, 1.1, 2.6], look_at: [0, 0.4, 0]}]}\n"   \
     "lights: [{type: point, position: [-0.8, 1.5, 0.8], intensity: 1.5}]\n"                        \
     "environment: {color: [0.3, 0.4, 0.6], intensity: 1}\n"                                        \
-    "integrator: {name: reference, reference: {spp: %d, max_bounces: 6, rr_depth: 2}}\n"
+    "integrator: {name: reference, reference: {spp: %d, max_bounces: 6, rr_depth: 2, "             \
+    "pixel_filter: " filter "}}\n"
+#define BUSY_JOB BUSY_JOB_WITH("center")
+#define BUSY_JOB_BOX BUSY_JOB_WITH("box")
 
 static void test_determinism(void **state)
 {
@@ -1655,6 +1757,17 @@ static void test_determinism(void **state)
     float *p0 = render(a, 0, &r0);
     assert_true(memcmp(p0, p1, bytes) != 0);
     free(p0);
+    /* the box filter's samples through the pixel too */
+    struct rb_job *jb = job_new(BUSY_JOB_BOX, 32, 24, 8);
+    struct rb_reference *d1 = ref_new(jb, s, 1), *d3 = ref_new(jb, s, 3);
+    float *b1 = render(d1, 1, &r0), *b3 = render(d3, 1, &r0);
+    assert_memory_equal(b1, b3, bytes);
+    assert_true(memcmp(b1, p1, bytes) != 0);
+    free(b3);
+    free(b1);
+    rb_reference_destroy(d3);
+    rb_reference_destroy(d1);
+    rb_job_destroy(jb);
     free(p1);
     free(p2);
     free(p3);
@@ -1932,6 +2045,28 @@ static void test_passes(void **state)
     float *four = render(ref4, 0, &r4);
     assert_memory_equal(stopped, four, (size_t)8 * 8 * RB_OUT_FLOATS * sizeof(float));
     assert_true(memcmp(stopped, full, (size_t)8 * 8 * RB_OUT_FLOATS * sizeof(float)) != 0);
+    /* likewise under the box filter, whose samples also choose their camera ray: four passes
+     * (8 samples) of 40 are 8 samples */
+    struct rb_job *jb40 = job_new(BUSY_JOB_BOX, 8, 8, 40), *jb8 = job_new(BUSY_JOB_BOX, 8, 8, 8);
+    struct rb_reference *refb = NULL;
+    log = (struct pass_log){.stop_after = 4};
+    assert_int_equal(
+        rb_reference_create(
+            &(struct rb_reference_desc){
+                .job = jb40, .scene = s, .thread_count = 2, .on_pass = on_pass, .user = &log},
+            &refb, &err),
+        RB_OK);
+    struct rb_reference *refb8 = ref_new(jb8, s, 3);
+    float *box_stopped = render(refb, 0, &r);
+    assert_int_equal(r.spp, 8);
+    float *box8 = render(refb8, 0, &r4);
+    assert_memory_equal(box_stopped, box8, (size_t)8 * 8 * RB_OUT_FLOATS * sizeof(float));
+    free(box8);
+    free(box_stopped);
+    rb_reference_destroy(refb8);
+    rb_reference_destroy(refb);
+    rb_job_destroy(jb8);
+    rb_job_destroy(jb40);
     /* a time limit that has run out stops after the first pass */
     struct rb_job_override o = {"integrator.reference.time_limit_s", "1e-9"};
     struct rb_job *jt = NULL;
@@ -1971,6 +2106,7 @@ int main(void)
         cmocka_unit_test(test_materials),
         cmocka_unit_test(test_skin),
         cmocka_unit_test(test_motion_and_morph),
+        cmocka_unit_test(test_pixel_filter),
         cmocka_unit_test(test_path_spaces),
         cmocka_unit_test(test_determinism),
         cmocka_unit_test(test_convergence),
