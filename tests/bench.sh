@@ -1,6 +1,7 @@
 #!/bin/sh
 # Benchmark (not a test): renders the demo at 640x360 for 24 frames and prints each pass's
-# median GPU milliseconds, frames per second and peak resident memory.
+# median GPU milliseconds, frames per second and peak resident memory; then the CPU reference's
+# speed, and its error on the Cornell box at 64 to 1024 spp.
 set -eu
 BUILD=${BUILD:-build}
 out=$(mktemp -d "${TMPDIR:-/tmp}/raybundle-bench.XXXXXX")
@@ -37,3 +38,40 @@ for threads in 1 2; do
         printf "reference 320x180 64 spp, %d thread(s): %.2f s/frame, %.2f Mrays/s (%d rays)\n",
                t, ms / 1000, r / (ms / 1000) / 1e6, r }'
 done
+
+# The CPU reference's error against its own long render, on the Cornell box from the shared
+# scenes: relMSE at 64, 256 and 1024 spp against 16384 spp, each the mean over frames 0-3 (one
+# frame's relMSE is dominated by a few fireflies). At 64x64, because the long render takes
+# about two minutes on two cores. The long render is frame 4, whose random numbers are
+# independent of the others'; its own error (1/16 of the 1024-spp figure's for plain Monte
+# Carlo, less for the Sobol sampler) is part of each figure.
+SCENES=${RB_SCENES:-../shared/scenes}
+cornell="$SCENES/cornell-box/CornellBox.glb"
+if [ -f "$cornell" ]; then
+    cat >"$out/cornell.yaml" <<EOT
+scene: $(cd "$(dirname "$cornell")" && pwd)/CornellBox.glb
+output: frame.####.exr
+resolution: [64, 64]
+frames: {start: 0, end: 4, rate: 24}
+camera: {fov_y_deg: 39.3, keys: [{t: 0, position: [-278, 273, 800], look_at: [-278, 273, 0]}]}
+lights: [{type: point, position: [-278, 10000, 0], intensity: 0}]
+integrator: {name: reference, reference: {spp: 64, max_bounces: 8}}
+EOT
+    truth="$out/truth/frame.0004.exr"
+    "$BUILD/raybundle" reference "$out/cornell.yaml" --frames 4 --spp 16384 --out "$out/truth" -q
+    ms=$(sed -n 's/.*"cpu_ms": \([0-9.eE+-]*\).*/\1/p' "$out/truth/frame.0004.timing.json")
+    awk -v ms="$ms" 'BEGIN { printf "reference cornell-box 64x64 (small: 16384 spp take %.0f s), relMSE against 16384 spp, mean of 4 frames:\n", ms / 1000 }'
+    for spp in 64 256 1024; do
+        "$BUILD/raybundle" reference "$out/cornell.yaml" --frames 0-3 --spp "$spp" \
+            --out "$out/cornell$spp" -q
+        for f in 0000 0001 0002 0003; do
+            relmse=$("$BUILD/raybundle" compare "$out/cornell$spp/frame.$f.exr" "$truth" |
+                sed -n 's/^relmse *//p')
+            ms=$(sed -n 's/.*"cpu_ms": \([0-9.eE+-]*\).*/\1/p' "$out/cornell$spp/frame.$f.timing.json")
+            echo "$relmse $ms"
+        done | awk -v s="$spp" '{ e += $1; ms += $2; v = v sprintf(" %.2e", $1) }
+            END { printf "  %5d spp: relMSE %.3e (frames:%s), %.2f s/frame\n", s, e / NR, v, ms / NR / 1000 }'
+    done
+else
+    echo "reference cornell-box relMSE: skipped, no $cornell (set RB_SCENES)"
+fi

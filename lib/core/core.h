@@ -1,5 +1,5 @@
 /* Core services every module uses: status codes and error messages, logging, small math,
- * hashing. Depends on nothing but libc. */
+ * hashing and quasi-Monte Carlo points. Depends on nothing but libc. */
 #ifndef RB_CORE_CORE_H
 #define RB_CORE_CORE_H
 
@@ -93,6 +93,35 @@ uint64_t rb_hash64(const void *data, size_t size, uint64_t seed);
 /* XXH3 (libxxhash), 64 bits, for large data (scene buffers, textures, environment maps): many
  * GB/s where FNV-1a does one byte at a time. Chain by passing the previous value as seed. */
 uint64_t rb_hash_bulk(const void *data, size_t size, uint64_t seed);
+
+/* SplitMix64's finalizer: a bijection of 64 bits with full avalanche, for counter-based random
+ * numbers (hash a counter, or chain a key through it). */
+uint64_t rb_mix64(uint64_t z);
+
+/* ---- quasi-Monte Carlo (qmc.c) ------------------------------------------------------------- */
+
+/* Points as 32-bit fixed-point fractions in [0, 1). All are pure functions: thread-safe and
+ * independent of the order of the calls. */
+
+/* Point index of the Sobol sequence in dimension dim, 0 or 1 (0 is van der Corput's radical
+ * inverse); the two together are a (0,2)-sequence in base 2. Other dims are a bug. */
+uint32_t rb_qmc_sobol(uint32_t index, uint32_t dim);
+
+/* A nested uniform (Owen) scramble of the fraction x keyed by seed (Burley 2020's hash-based
+ * form): a bijection under which two fractions that share their first k bits still share
+ * their first k (so it maps elementary intervals onto elementary intervals). Applied to a
+ * sample index, it maps every aligned block of 2^k indices onto an aligned block of 2^k. */
+uint32_t rb_qmc_owen(uint32_t x, uint32_t seed);
+
+/* Point index of the 2D stream numbered stream: the Sobol (0,2)-sequence with its index
+ * shuffled and each dimension Owen-scrambled, all by seeds hashed from stream. Any aligned
+ * block of 2^k indices (the first 2^k, say) has exactly one point in each elementary interval
+ * of area 2^-k; over streams, every point is uniform on the unit square. Different streams are
+ * independent, which is how a renderer pads 2D pairs into more dimensions. */
+void rb_qmc_point2(uint64_t stream, uint32_t index, uint32_t out[2]);
+
+/* A fraction as a float in [0, 1) (its 24 leading bits, exactly). */
+float rb_qmc_float(uint32_t x);
 
 /* ---- frame results ------------------------------------------------------------------------- */
 

@@ -64,6 +64,7 @@ struct key {
 static const char *const integrator_names[] = {NULL, "direct", "bdpt", "hybrid", "reference"};
 static const char *const interp_names[] = {NULL, "linear", "catmull-rom"};
 static const char *const path_names[] = {NULL, "full", "direct", "bdpt"};
+static const char *const pixel_filter_names[] = {NULL, "center", "box"};
 static const char *const light_names[] = {NULL, "point", "spot", "directional"};
 static const char *const default_light_names[] = {NULL, "auto", "on", "off"};
 
@@ -186,6 +187,9 @@ static const struct key keys[] = {
       "reference: bounces before Russian roulette may end a path"),
     K("integrator.reference.paths", KT_ENUM, JOB(integrator.reference.paths), NOLO, NOHI, "full", 0,
       "reference: which light paths count (full, direct, bdpt)", ENUM(path_names)),
+    K("integrator.reference.pixel_filter", KT_ENUM, JOB(integrator.reference.pixel_filter), NOLO,
+      NOHI, "center", 0, "reference: where samples pass through a pixel (center, box)",
+      ENUM(pixel_filter_names)),
     K("integrator.reference.time_limit_s", KT_DOUBLE, JOB(integrator.reference.time_limit_s), 0,
       NOHI, "0", 0, "reference: stop after the pass of samples that crosses this time; 0: none"),
     K("color.config", KT_PATH, JOB(color.config), NOLO, NOHI, NULL, KF_MUST_EXIST,
@@ -1191,6 +1195,7 @@ void rb_job_rehash(struct rb_job *job)
         h = h_u32(h, job->integrator.reference.rr_depth);
         h = h_u32(h, (uint32_t)job->integrator.reference.paths);
         h = h_f64(h, job->integrator.reference.time_limit_s);
+        h = h_u32(h, (uint32_t)job->integrator.reference.pixel_filter);
     } else {
         h = h_u32(h, job->integrator.direct.shadow_size_px);
         h = h_f32(h, job->integrator.direct.shadow_bias);

@@ -32,6 +32,13 @@ enum rb_path_space {
                            * punctual lights, the environment's direct light */
 };
 
+/* Where the reference's samples pass through a pixel. */
+enum rb_pixel_filter {
+    RB_PIXEL_FILTER_DEFAULT = 0, /* resolves to CENTER */
+    RB_PIXEL_FILTER_CENTER,      /* all through the centre, as the rasterizer samples */
+    RB_PIXEL_FILTER_BOX,         /* uniformly over the pixel: a 1-pixel box filter */
+};
+
 enum rb_light_type {
     RB_LIGHT_INVALID = 0,
     RB_LIGHT_POINT,
@@ -112,6 +119,7 @@ struct rb_job {
             uint32_t max_bounces; /* default 8; 0: direct light only */
             uint32_t rr_depth;    /* Russian roulette after this many bounces, default 3 */
             enum rb_path_space paths;
+            enum rb_pixel_filter pixel_filter;
             double time_limit_s; /* 0: none; else stop at a whole pass when it runs out */
         } reference;
     } integrator;

@@ -2,11 +2,15 @@
  * the per-frame world (deformed mesh, Embree scene, lights, emitters) and the threads.
  *
  * What it computes, and where it deliberately matches the GPU rather than a camera model:
- * - Every sample of a pixel uses the one camera ray through the pixel centre, the rasterizer's
- *   sample position (clipped to the camera's near and far planes, skipping back faces of
- *   single-sided materials and alpha-masked texels, as the G-buffer's discards do). So the
- *   reference and the GPU integrators differ only in light transport, never in coverage: edges
- *   are aliased exactly like the G-buffer's, and the AOVs are exact.
+ * - pixel_filter center (the default): every sample of a pixel uses the one camera ray through
+ *   the pixel centre, the rasterizer's sample position (clipped to the camera's near and far
+ *   planes, skipping back faces of single-sided materials and alpha-masked texels, as the
+ *   G-buffer's discards do). So the reference and the GPU integrators differ only in light
+ *   transport, never in coverage: edges are aliased exactly like the G-buffer's, and the AOVs
+ *   are exact. pixel_filter box: each sample takes its own camera ray through a uniform point
+ *   of the pixel (its first pair of dimensions), which may miss: beauty, direct and indirect
+ *   average what the samples see, alpha is the fraction that hit. The AOVs still come from the
+ *   centre's ray under box: an average of depths or normals across an edge is no surface's.
  * - Geometry, materials, textures, punctual lights and the environment are shaders/animate.comp,
  *   gbuffer.frag, brdf.glsl and lights.glsl transcribed (deform.c, material.c, brdf.c,
  *   lights.c); textures are filtered at their own resolution without mipmaps.
@@ -16,20 +20,27 @@
  * - Light transport (trace.c): path tracing with next-event estimation; MIS with the power
  *   heuristic (beta 2) between BSDF sampling and emitter/environment sampling; one-sample MIS
  *   over the two BRDF lobes; Russian roulette after rr_depth bounces, survival = the
- *   throughput's largest component clamped to [0.05, 0.95].
+ *   throughput's largest component clamped to [0.05, 0.95]. Rays leave from a point moved off
+ *   the surface, and shadow rays are aimed from that point (emitter samples measured from it).
  * - Path spaces: FULL counts every path up to max_bounces bounces past the first hit. DIRECT is
  *   the direct integrator's: emission at x1, punctual lights at x1 (exact visibility), the
- *   environment on camera misses; it draws no random numbers, so its samples after the first are
- *   copies. BDPT is BDPT.md's: DIRECT plus the environment's light at x1 (light and BSDF
- *   samples, MIS) plus punctual light after one and two bounces (at x2, x3); emissive triangles
- *   light nothing but themselves.
+ *   environment on camera misses; it draws no random numbers but box's pixel positions, so
+ *   under center its samples after the first are copies. BDPT is BDPT.md's: DIRECT plus the
+ *   environment's light at x1 (light and BSDF samples, MIS) plus punctual light after one and
+ *   two bounces (at x2, x3); emissive triangles light nothing but themselves.
  * - Layers: direct = emission at x1 + light reaching x1 after exactly one scattering + the
  *   environment on camera misses; indirect = the rest; beauty = direct + indirect, alpha 1 on a
- *   hit and 0 on a miss. AOVs from the first hit: albedo (c_diff), shading normal, view depth,
- *   motion (previous minus current pixel position of the same surface point).
- * Determinism: random numbers are a hash of (frame, pixel, sample, dimension) (sample.c); each
- * pixel's samples are summed in sample order in double by whichever thread owns its row, so the
- * bits do not depend on the thread count. Samples come in passes of 1, 1, 2, 4, 8, then 16. */
+ *   hit and 0 on a miss (averaged under box). AOVs from the first hit: albedo (c_diff), shading
+ *   normal, view depth, motion (previous minus current pixel position of the same surface
+ *   point).
+ * Samples (sample.c): a pixel's samples are Owen-scrambled Sobol (0,2)-sequences in pairs of
+ * dimensions (the pixel position, each vertex's BSDF direction, emitter point, environment
+ * direction), padded with independent seeds per frame, pixel and pair; the error falls faster
+ * than 1/sqrt(spp) where a pair's integrand is smooth. RB_REFERENCE_SAMPLER_HASH gives
+ * independent hashed numbers instead (plain Monte Carlo), for comparisons.
+ * Determinism: every number is a function of (frame, pixel, sample, dimension); each pixel's
+ * samples are summed in sample order in double by whichever thread owns its row, so the bits
+ * do not depend on the thread count. Samples come in passes of 1, 1, 2, 4, 8, then 16. */
 #include "reference/reference_int.h"
 
 #include <math.h>
@@ -46,13 +57,15 @@
 #define MAX_CLIPS 64
 #define MAX_THREADS 256
 #define MAX_PASS_SPP 16
-#define ACCUM 6 /* doubles per pixel: direct RGB, indirect RGB */
+#define ACCUM 7 /* doubles per pixel: direct RGB, indirect RGB, samples that hit (box) */
 
 struct rb_reference {
     const struct rb_job *job;
     const struct rb_scene *scene;
     struct rb_scene_setup setup; /* decided once for the job: bounds, default light */
     uint32_t thread_count;
+    bool is_hashed_sampler;
+    bool use_box_filter; /* job: integrator.reference.pixel_filter box */
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
     void *user;
 
@@ -262,6 +275,8 @@ enum rb_status rb_reference_create(const struct rb_reference_desc *desc, struct 
     ref->scene = desc->scene;
     ref->on_pass = desc->on_pass;
     ref->user = desc->user;
+    ref->is_hashed_sampler = desc->sampler == RB_REFERENCE_SAMPLER_HASH;
+    ref->use_box_filter = job->integrator.reference.pixel_filter == RB_PIXEL_FILTER_BOX;
     uint32_t threads = desc->thread_count;
     if (threads == 0) {
         long n = sysconf(_SC_NPROCESSORS_ONLN);
@@ -496,6 +511,7 @@ static enum rb_status prepare_frame(struct rb_reference *ref, int frame, double 
     w->max_bounces = job->integrator.reference.max_bounces;
     w->rr_depth = job->integrator.reference.rr_depth;
     w->frame = (uint32_t)frame;
+    w->is_hashed_sampler = ref->is_hashed_sampler;
     return RB_OK;
 }
 
@@ -508,7 +524,39 @@ static void project_px(const struct rb_mat4 *m, const float p[3], float w, float
     out[1] = (c.y / c.w * 0.5f + 0.5f) * h;
 }
 
-/* The camera ray of pixel (x, y), its first hit, and the AOVs (or the environment on a miss). */
+/* The unit direction of the camera ray through (sx, sy) in pixels (pixel x's centre is at
+ * x + 0.5). */
+static void camera_dir(const struct rb_reference *ref, const struct rb_mat4 *inv_vp, float sx,
+                       float sy, float dir[3])
+{
+    float ndc_x = sx / (float)ref->width_px * 2.0f - 1.0f;
+    float ndc_y = sy / (float)ref->height_px * 2.0f - 1.0f;
+    struct rb_vec4 far = rb_mat4_vec4(inv_vp, (struct rb_vec4){ndc_x, ndc_y, 1.0f, 1.0f});
+    dir[0] = far.x / far.w - ref->cam.position.x;
+    dir[1] = far.y / far.w - ref->cam.position.y;
+    dir[2] = far.z / far.w - ref->cam.position.z;
+    float len = sqrtf(rb_ref_dot(dir, dir));
+    for (int k = 0; k < 3; k++)
+        dir[k] = len > 0.0f ? dir[k] / len : 0.0f;
+}
+
+/* The first hit of a camera ray with direction dir (unit). */
+static void camera_hit(const struct rb_reference *ref, const float dir[3], struct rb_ref_hit *hit,
+                       uint64_t *rays)
+{
+    /* The rasterizer clips at the near and far planes, which are view depths. */
+    float cos_fwd = rb_ref_dot(dir, ref->cam_forward);
+    hit->prim = RB_REF_NONE;
+    if (cos_fwd > 0.0f) {
+        float org[3] = {ref->cam.position.x, ref->cam.position.y, ref->cam.position.z};
+        rb_ref_intersect(&ref->world, true, org, dir, ref->cam.z_near / cos_fwd,
+                         ref->cam.z_far / cos_fwd, hit);
+        (*rays)++;
+    }
+}
+
+/* The camera ray through the centre of pixel (x, y), its first hit, and the AOVs (or the
+ * environment on a miss). */
 static void primary_pixel(struct rb_reference *ref, const struct rb_mat4 *inv_vp, uint32_t x,
                           uint32_t y, uint64_t *rays)
 {
@@ -516,27 +564,12 @@ static void primary_pixel(struct rb_reference *ref, const struct rb_mat4 *inv_vp
     size_t i = (size_t)y * ref->width_px + x;
     float *o = ref->pixels + i * RB_OUT_FLOATS;
     float fw = (float)ref->width_px, fh = (float)ref->height_px;
-    float ndc_x = ((float)x + 0.5f) / fw * 2.0f - 1.0f;
-    float ndc_y = ((float)y + 0.5f) / fh * 2.0f - 1.0f;
-    struct rb_vec4 far = rb_mat4_vec4(inv_vp, (struct rb_vec4){ndc_x, ndc_y, 1.0f, 1.0f});
-    float dir[3] = {far.x / far.w - ref->cam.position.x, far.y / far.w - ref->cam.position.y,
-                    far.z / far.w - ref->cam.position.z};
-    float len = sqrtf(rb_ref_dot(dir, dir));
-    for (int k = 0; k < 3; k++)
-        dir[k] = len > 0.0f ? dir[k] / len : 0.0f;
+    float dir[3];
+    camera_dir(ref, inv_vp, (float)x + 0.5f, (float)y + 0.5f, dir);
     memcpy(ref->primary_dir + i * 3, dir, sizeof(dir));
     memset(o, 0, RB_OUT_FLOATS * sizeof(float));
-
-    /* The rasterizer clips at the near and far planes, which are view depths. */
-    float cos_fwd = rb_ref_dot(dir, ref->cam_forward);
     struct rb_ref_hit *hit = &ref->primary[i];
-    hit->prim = RB_REF_NONE;
-    if (cos_fwd > 0.0f) {
-        float org[3] = {ref->cam.position.x, ref->cam.position.y, ref->cam.position.z};
-        rb_ref_intersect(w, true, org, dir, ref->cam.z_near / cos_fwd, ref->cam.z_far / cos_fwd,
-                         hit);
-        (*rays)++;
-    }
+    camera_hit(ref, dir, hit, rays);
     if (hit->prim == RB_REF_NONE) {
         float env[3];
         rb_ref_env_eval(&ref->env, dir, env);
@@ -562,14 +595,18 @@ static void primary_pixel(struct rb_reference *ref, const struct rb_mat4 *inv_vp
     o[RB_OUT_MOTION + 1] = prev_px[1] - cur_px[1];
 }
 
-static void trace_pixel(struct rb_reference *ref, size_t i, uint32_t s0, uint32_t s1,
-                        uint64_t *rays)
+/* Samples [s0, s1) of pixel (x, y): all through the centre ray found by primary_pixel, or each
+ * through its own point of the pixel (box filter), which may miss. */
+static void trace_pixel(struct rb_reference *ref, const struct rb_mat4 *inv_vp, uint32_t x,
+                        uint32_t y, uint32_t s0, uint32_t s1, uint64_t *rays)
 {
+    const struct rb_ref_world *w = &ref->world;
+    size_t i = (size_t)y * ref->width_px + x;
     const struct rb_ref_hit *hit = &ref->primary[i];
-    if (hit->prim == RB_REF_NONE)
+    if (!ref->use_box_filter && hit->prim == RB_REF_NONE)
         return;
     double *acc = ref->accum + i * ACCUM;
-    if (ref->world.paths == RB_PATHS_DIRECT && s0 > 0) {
+    if (!ref->use_box_filter && w->paths == RB_PATHS_DIRECT && s0 > 0) {
         /* No random numbers in this path space: every sample is the first one. The sums stay
          * exact (s0 copies of a float, divided by s0, times s1). */
         for (int c = 0; c < ACCUM; c++)
@@ -577,9 +614,25 @@ static void trace_pixel(struct rb_reference *ref, size_t i, uint32_t s0, uint32_
         return;
     }
     for (uint32_t s = s0; s < s1; s++) {
+        struct rb_ref_rng rng;
+        rb_ref_rng_init(&rng, w->is_hashed_sampler, w->frame, (uint32_t)i, s);
         float direct[3] = {0, 0, 0}, indirect[3] = {0, 0, 0};
-        rb_ref_trace_sample(&ref->world, hit, ref->primary_dir + i * 3, (uint32_t)i, s, direct,
-                            indirect, rays);
+        if (ref->use_box_filter) {
+            float u[2], dir[3];
+            rb_ref_rand2(&rng, RB_REF_DIM_PIXEL, u);
+            camera_dir(ref, inv_vp, (float)x + u[0], (float)y + u[1], dir);
+            struct rb_ref_hit h;
+            camera_hit(ref, dir, &h, rays);
+            if (h.prim == RB_REF_NONE) {
+                rb_ref_env_eval(&ref->env, dir, direct);
+            } else {
+                rb_ref_trace_sample(w, &h, dir, &rng, direct, indirect, rays);
+                acc[6] += 1.0;
+            }
+        } else {
+            rb_ref_trace_sample(w, hit, ref->primary_dir + i * 3, &rng, direct, indirect, rays);
+            acc[6] += 1.0;
+        }
         for (int c = 0; c < 3; c++) {
             acc[c] += direct[c];
             acc[3 + c] += indirect[c];
@@ -612,7 +665,7 @@ static void *stage_worker(void *arg)
             if (st->is_primary)
                 primary_pixel(ref, &st->inv_vp, x, y, &rays);
             else
-                trace_pixel(ref, (size_t)y * ref->width_px + x, st->s0, st->s1, &rays);
+                trace_pixel(ref, &st->inv_vp, x, y, st->s0, st->s1, &rays);
         }
     }
     atomic_fetch_add(&st->rays, rays);
@@ -654,8 +707,8 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame,
     size_t px = (size_t)ref->width_px * ref->height_px;
     memset(ref->accum, 0, px * ACCUM * sizeof(double));
 
-    struct stage stage = {.ref = ref, .is_primary = true};
-    stage.inv_vp = rb_mat4_inverse(&ref->world_to_ndc, NULL);
+    struct rb_mat4 inv_vp = rb_mat4_inverse(&ref->world_to_ndc, NULL);
+    struct stage stage = {.ref = ref, .is_primary = true, .inv_vp = inv_vp};
     uint64_t rays = run_stage(ref, &stage);
 
     uint32_t spp_total =
@@ -664,7 +717,8 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame,
     uint32_t done = 0, pass = 1;
     while (done < spp_total) {
         uint32_t n = pass < spp_total - done ? pass : spp_total - done;
-        stage = (struct stage){.ref = ref, .is_primary = false, .s0 = done, .s1 = done + n};
+        stage = (struct stage){
+            .ref = ref, .is_primary = false, .s0 = done, .s1 = done + n, .inv_vp = inv_vp};
         rays += run_stage(ref, &stage);
         done += n;
         if (done > 1 && pass < MAX_PASS_SPP)
@@ -676,7 +730,7 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame,
 
     double inv = 1.0 / (double)done;
     for (size_t i = 0; i < px; i++) {
-        if (ref->primary[i].prim == RB_REF_NONE)
+        if (!ref->use_box_filter && ref->primary[i].prim == RB_REF_NONE)
             continue; /* the environment, written by the camera ray */
         const double *acc = ref->accum + i * ACCUM;
         float *o = ref->pixels + i * RB_OUT_FLOATS;
@@ -686,7 +740,8 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame,
             o[RB_OUT_DIRECT + c] = (float)d;
             o[RB_OUT_INDIRECT + c] = (float)ind;
         }
-        o[RB_OUT_BEAUTY + 3] = 1.0f;
+        /* box: the fraction of the pixel's samples that hit a surface */
+        o[RB_OUT_BEAUTY + 3] = ref->use_box_filter ? (float)(acc[6] / (double)done) : 1.0f;
     }
     /* Every float of the result, as the output pass counts them on the GPU. */
     uint32_t nonfinite = 0;

@@ -2,7 +2,7 @@
  * textures, lights and environment as the GPU integrators (Embree for intersection), used as
  * the ground truth every GPU integrator is judged against (DESIGN.md "reference", seed 003's
  * "Ground Truth Comparison"). Deterministic: per-pixel, per-sample random numbers keyed by
- * (frame, pixel, sample), so the result does not depend on the thread count. */
+ * (frame, pixel, sample, dimension), so the result does not depend on the thread count. */
 #ifndef RB_REFERENCE_REFERENCE_H
 #define RB_REFERENCE_REFERENCE_H
 
@@ -12,6 +12,14 @@
 
 struct rb_reference;
 
+/* Where the random numbers come from (sample.c). */
+enum rb_reference_sampler {
+    RB_REFERENCE_SAMPLER_DEFAULT = 0, /* resolves to SOBOL */
+    RB_REFERENCE_SAMPLER_SOBOL,       /* Owen-scrambled Sobol (0,2)-sequences, padded in pairs */
+    RB_REFERENCE_SAMPLER_HASH,        /* independent hashed numbers: plain Monte Carlo, for
+                                       * measuring what the sequences gain */
+};
+
 struct rb_reference_desc {
     const struct rb_job *job;     /* borrowed: settings in job->integrator.reference */
     const struct rb_scene *scene; /* borrowed */
@@ -19,6 +27,7 @@ struct rb_reference_desc {
     uint32_t env_width_px, env_height_px;
     const struct rb_scene_setup *setup; /* borrowed, or NULL: the reference decides its own */
     uint32_t thread_count;              /* 0: all cores */
+    enum rb_reference_sampler sampler;  /* 0: Sobol */
     /* Called after each whole pass of samples with the samples done so far (for progress);
      * may be NULL. Returning false stops after that pass (as a time limit does). */
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
@@ -64,7 +73,9 @@ const char *rb_reference_embree_version(void);
 void rb_reference_brdf(const float n[3], const float v[3], const float l[3], const float c_diff[3],
                        const float f0[3], float f90, float roughness, float out[3]);
 
-/* The counter-based random number in [0, 1) for (frame, pixel, sample, dimension). */
+/* The default sampler's number in [0, 1) for (frame, pixel, sample, dimension): dimensions 2k
+ * and 2k + 1 of one pixel's samples are an Owen-scrambled Sobol (0,2)-sequence; different
+ * pixels, frames and pairs are independent. */
 float rb_reference_random(uint32_t frame, uint32_t pixel, uint32_t sample, uint32_t dim);
 
 #endif

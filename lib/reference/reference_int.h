@@ -12,9 +12,20 @@
 
 /* ---- random numbers (sample.c) -------------------------------------------------------------- */
 
-/* The stream of one (frame, pixel, sample); rb_ref_rand(key, dim) is rb_reference_random. */
-uint64_t rb_ref_rand_key(uint32_t frame, uint32_t pixel, uint32_t sample);
-float rb_ref_rand(uint64_t key, uint32_t dim);
+/* The numbers of one sample of one pixel in one frame. */
+struct rb_ref_rng {
+    uint64_t seed; /* the pixel's in this frame (hashed: and the sample's) */
+    uint32_t sample;
+    bool is_hashed; /* RB_REFERENCE_SAMPLER_HASH */
+};
+
+void rb_ref_rng_init(struct rb_ref_rng *rng, bool is_hashed, uint32_t frame, uint32_t pixel,
+                     uint32_t sample);
+/* Dimension dim, in [0, 1); with the default sampler, rb_reference_random. Dimensions 2k and
+ * 2k + 1 are one 2D point (stratified together over the samples): give a 2D integral such a
+ * pair. rb_ref_rand2 draws both of the pair that starts at dim (even) at once. */
+float rb_ref_rand(const struct rb_ref_rng *rng, uint32_t dim);
+void rb_ref_rand2(const struct rb_ref_rng *rng, uint32_t dim, float out[2]);
 
 /* ---- the world of one frame ------------------------------------------------------------------ */
 
@@ -77,7 +88,8 @@ struct rb_ref_world {
 
     enum rb_path_space paths;
     uint32_t max_bounces, rr_depth;
-    uint32_t frame; /* for the random numbers */
+    uint32_t frame;         /* for the random numbers */
+    bool is_hashed_sampler; /* RB_REFERENCE_SAMPLER_HASH */
 };
 
 /* A shading point, as gbuffer.frag builds it. */
@@ -187,10 +199,15 @@ float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, fl
 
 /* ---- the integrator (trace.c) --------------------------------------------------------------- */
 
+/* Dimensions [0, RB_REF_DIM_CAMERA_END) of each sample are the camera's (the pixel filter's
+ * position in the pixel); the path's start after them. */
+#define RB_REF_DIM_PIXEL 0
+#define RB_REF_DIM_CAMERA_END 16
+
 /* One sample of one pixel whose camera ray (direction dir) hit hit: adds the light of the
  * direct and indirect layers to direct and indirect (zeroed by the caller). */
 void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
-                         const float dir[3], uint32_t pixel, uint32_t sample, float direct[3],
+                         const float dir[3], const struct rb_ref_rng *rng, float direct[3],
                          float indirect[3], uint64_t *rays);
 
 /* ---- small vector helpers ------------------------------------------------------------------- */

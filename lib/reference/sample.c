@@ -1,37 +1,52 @@
-/* The reference's random numbers: a counter-based hash of (frame, pixel, sample, dimension), so
- * every number is independent of the thread that draws it and of the order of drawing. It is
- * deliberately not a low-discrepancy sequence: the error falls like 1/sqrt(spp), which is what
- * the convergence checks expect of a ground truth. */
+/* The reference's random numbers, keyed by (frame, pixel, sample, dimension) so that every
+ * number is independent of the thread that draws it and of the order of drawing. By default a
+ * low-discrepancy sampler: dimensions 2k and 2k+1 are one 2D point of an Owen-scrambled Sobol
+ * (0,2)-sequence (lib/core/qmc.c) over the samples, each pair with its own seeds and shuffled
+ * index (padding), each pixel and frame with its own seed. Its error falls faster than
+ * 1/sqrt(spp) where the integrand is smooth in a pair, and never more slowly (the variance of
+ * scrambled nets is o(1/spp) for any square-integrable integrand, Owen 1997). The hashed
+ * sampler is independent uniform numbers: plain Monte Carlo, for comparisons. */
 #include "reference/reference_int.h"
-
-/* SplitMix64's finalizer (Steele, Lea and Flood 2014, constants of Stafford's variant 13): a
- * bijection of 64 bits with full avalanche. */
-static inline uint64_t mix64(uint64_t z)
-{
-    z ^= z >> 30;
-    z *= 0xbf58476d1ce4e5b9ull;
-    z ^= z >> 27;
-    z *= 0x94d049bb133111ebull;
-    z ^= z >> 31;
-    return z;
-}
 
 #define GOLDEN 0x9e3779b97f4a7c15ull
 
-uint64_t rb_ref_rand_key(uint32_t frame, uint32_t pixel, uint32_t sample)
+void rb_ref_rng_init(struct rb_ref_rng *rng, bool is_hashed, uint32_t frame, uint32_t pixel,
+                     uint32_t sample)
 {
-    uint64_t h = mix64((((uint64_t)frame << 32) | pixel) + GOLDEN);
-    return mix64(h ^ mix64((uint64_t)sample * 0xd1b54a32d192ed03ull + 0x632be59bd9b4e019ull));
+    uint64_t h = rb_mix64((((uint64_t)frame << 32) | pixel) + GOLDEN);
+    rng->is_hashed = is_hashed;
+    rng->sample = sample;
+    if (is_hashed)
+        h = rb_mix64(h ^
+                     rb_mix64((uint64_t)sample * 0xd1b54a32d192ed03ull + 0x632be59bd9b4e019ull));
+    rng->seed = h;
 }
 
-float rb_ref_rand(uint64_t key, uint32_t dim)
+float rb_ref_rand(const struct rb_ref_rng *rng, uint32_t dim)
 {
-    /* A SplitMix64 stream seeded by the key: the dim-th output. */
-    uint64_t h = mix64(key + ((uint64_t)dim + 1) * GOLDEN);
-    return (float)(h >> 40) * 0x1p-24f; /* 24 bits: exactly representable, < 1 */
+    if (rng->is_hashed) /* a SplitMix64 stream seeded by the key: the dim-th output */
+        return rb_qmc_float((uint32_t)(rb_mix64(rng->seed + ((uint64_t)dim + 1) * GOLDEN) >> 32));
+    uint32_t p[2];
+    rb_qmc_point2(rng->seed + ((uint64_t)(dim >> 1) + 1) * GOLDEN, rng->sample, p);
+    return rb_qmc_float(p[dim & 1]);
+}
+
+void rb_ref_rand2(const struct rb_ref_rng *rng, uint32_t dim, float out[2])
+{
+    if (rng->is_hashed || (dim & 1)) {
+        out[0] = rb_ref_rand(rng, dim);
+        out[1] = rb_ref_rand(rng, dim + 1);
+        return;
+    }
+    uint32_t p[2];
+    rb_qmc_point2(rng->seed + ((uint64_t)(dim >> 1) + 1) * GOLDEN, rng->sample, p);
+    out[0] = rb_qmc_float(p[0]);
+    out[1] = rb_qmc_float(p[1]);
 }
 
 float rb_reference_random(uint32_t frame, uint32_t pixel, uint32_t sample, uint32_t dim)
 {
-    return rb_ref_rand(rb_ref_rand_key(frame, pixel, sample), dim);
+    struct rb_ref_rng rng;
+    rb_ref_rng_init(&rng, false, frame, pixel, sample);
+    return rb_ref_rand(&rng, dim);
 }

@@ -8,22 +8,36 @@
 
 #include <math.h>
 
-/* Random dimensions: a block per path vertex. */
+/* Random dimensions: a block per path vertex, after the camera's. Even offsets start 2D pairs
+ * (sample.c): the three 2D integrals get one each, the 1D choices share the rest. */
 enum {
-    DIM_LOBE,
-    DIM_DIR0,
-    DIM_DIR1,
-    DIM_RR,
-    DIM_EMIT_PICK,
-    DIM_EMIT_U,
-    DIM_EMIT_V,
-    DIM_ENV_U,
-    DIM_ENV_V,
+    DIM_DIR = 0,     /* and 1: the BSDF sample's direction */
+    DIM_EMIT_UV = 2, /* and 3: the point on the emissive triangle */
+    DIM_ENV_UV = 4,  /* and 5: the environment's direction */
+    DIM_LOBE = 6,
+    DIM_EMIT_PICK = 7,
+    DIM_RR = 8,
     DIMS_PER_VERTEX = 16
 };
 
 /* Shadow rays stop this fraction short of the light's point. */
 #define SHADOW_SHORTEN 1e-4f
+
+/* The shadow ray from org (already off the surface) toward point q: true when something is in
+ * between. It is aimed from org itself: a ray aimed from the surface point but started at org
+ * runs parallel to the intended one, off by the offset, and near a surface nearly parallel to
+ * the ray it crosses that surface before its end. */
+static bool occluded_toward(const struct rb_ref_world *w, const float org[3], const float q[3],
+                            uint64_t *rays)
+{
+    float d[3] = {q[0] - org[0], q[1] - org[1], q[2] - org[2]};
+    float dist = sqrtf(rb_ref_dot(d, d));
+    if (!(dist > 0.0f))
+        return false;
+    float l[3] = {d[0] / dist, d[1] / dist, d[2] / dist};
+    (*rays)++;
+    return rb_ref_occluded(w, org, l, dist * (1.0f - SHADOW_SHORTEN));
+}
 
 static float power_heuristic(float a, float b)
 {
@@ -88,10 +102,18 @@ static void nee_punctual(const struct rb_ref_world *w, const struct rb_ref_surfa
             c[k] = f[k] * L->color[k] * atten * ndl;
         if (is_black(c))
             continue;
+        /* Shaded at the surface point, as direct.comp does; the shadow ray leaves from off the
+         * surface, toward the light's position (or along the directional light's rays). */
         float org[3];
         rb_ref_offset(s->p, s->ng, org);
-        (*rays)++;
-        if (rb_ref_occluded(w, org, l, dist < INFINITY ? dist * (1.0f - SHADOW_SHORTEN) : dist))
+        bool is_blocked;
+        if (dist < INFINITY) {
+            is_blocked = occluded_toward(w, org, L->position, rays);
+        } else {
+            (*rays)++;
+            is_blocked = rb_ref_occluded(w, org, l, INFINITY);
+        }
+        if (is_blocked)
             continue;
         for (int k = 0; k < 3; k++)
             acc[k] += beta[k] * c[k];
@@ -113,35 +135,50 @@ static uint32_t pick_emitter(const struct rb_ref_world *w, float u)
     return w->emitters[lo];
 }
 
-/* |cos| between triangle prim's face and unit direction l. */
-static float face_cos(const struct rb_ref_world *w, uint32_t prim, const float l[3])
+/* Triangle prim's unit face normal (zero for a degenerate one). */
+static void face_normal(const struct rb_ref_world *w, uint32_t prim, float n[3])
 {
     const uint32_t *tri = &w->tris[(size_t)prim * 3];
     const float *p0 = &w->pos[tri[0] * 4], *p1 = &w->pos[tri[1] * 4], *p2 = &w->pos[tri[2] * 4];
     float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
     float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-    float n[3];
     rb_ref_cross(e1, e2, n);
     float len = sqrtf(rb_ref_dot(n, n));
-    return len > 0.0f ? fabsf(rb_ref_dot(n, l)) / len : 0.0f;
+    for (int i = 0; i < 3; i++)
+        n[i] = len > 0.0f ? n[i] / len : 0.0f;
 }
 
-/* One point on one emissive triangle, chosen by power, then uniformly by area. */
-static void nee_area(const struct rb_ref_world *w, const struct rb_ref_surface *s,
-                     const struct rb_ref_bsdf *b, const float beta[3], float acc[3], uint64_t key,
-                     uint32_t dim, uint64_t *rays)
+/* |cos| between triangle prim's face and unit direction l. */
+static float face_cos(const struct rb_ref_world *w, uint32_t prim, const float l[3])
 {
-    uint32_t prim = pick_emitter(w, rb_ref_rand(key, dim + DIM_EMIT_PICK));
-    float su = sqrtf(rb_ref_rand(key, dim + DIM_EMIT_U)), r = rb_ref_rand(key, dim + DIM_EMIT_V);
+    float n[3];
+    face_normal(w, prim, n);
+    return fabsf(rb_ref_dot(n, l));
+}
+
+/* One point on one emissive triangle, chosen by power, then uniformly by area. Direction,
+ * distance and pdf are measured from the shadow ray's origin off the surface, as the BSDF
+ * samples' hits are (their distance is from the same origin), so the two MIS weights agree. */
+static void nee_area(const struct rb_ref_world *w, const struct rb_ref_surface *s,
+                     const struct rb_ref_bsdf *b, const float beta[3], float acc[3],
+                     const struct rb_ref_rng *rng, uint32_t dim, uint64_t *rays)
+{
+    uint32_t prim = pick_emitter(w, rb_ref_rand(rng, dim + DIM_EMIT_PICK));
+    float uv[2];
+    rb_ref_rand2(rng, dim + DIM_EMIT_UV, uv);
+    float su = sqrtf(uv[0]), r = uv[1];
     float bu = su * (1.0f - r), bv = su * r;
-    float q[3];
+    float q[3], org[3];
     rb_ref_hit_point(w, prim, bu, bv, q);
-    float d[3] = {q[0] - s->p[0], q[1] - s->p[1], q[2] - s->p[2]};
+    rb_ref_offset(s->p, s->ng, org);
+    float d[3] = {q[0] - org[0], q[1] - org[1], q[2] - org[2]};
     float dist2 = rb_ref_dot(d, d), dist = sqrtf(dist2);
     if (!(dist > 0.0f))
         return;
     float l[3] = {d[0] / dist, d[1] / dist, d[2] / dist};
-    float cos_l = face_cos(w, prim, l);
+    float ne[3];
+    face_normal(w, prim, ne);
+    float cos_l = fabsf(rb_ref_dot(ne, l));
     if (!(cos_l > 0.0f))
         return;
     float pdf = w->emit_pdf_area[prim] * dist2 / cos_l;
@@ -154,21 +191,28 @@ static void nee_area(const struct rb_ref_world *w, const struct rb_ref_surface *
     rb_ref_emission(w, prim, bu, bv, le);
     if (is_black(le))
         return;
-    float org[3];
-    rb_ref_offset(s->p, s->ng, org);
-    (*rays)++;
-    if (rb_ref_occluded(w, org, l, dist * (1.0f - SHADOW_SHORTEN)))
+    /* The ray ends just off the emitter on org's side, so that it cannot hit the emitter
+     * itself (a relative shortening alone leaves a gap of only a few ulps when the ray is
+     * nearly parallel to the emitter). */
+    if (rb_ref_dot(ne, l) > 0.0f)
+        for (int i = 0; i < 3; i++)
+            ne[i] = -ne[i];
+    float q_off[3];
+    rb_ref_offset(q, ne, q_off);
+    if (occluded_toward(w, org, q_off, rays))
         return;
     add_scaled(acc, beta, f, le, power_heuristic(pdf, rb_ref_bsdf_pdf(b, l)) / pdf);
 }
 
+/* The environment is at infinity: a shadow ray along l from anywhere near the surface aims at
+ * the same light. */
 static void nee_env(const struct rb_ref_world *w, const struct rb_ref_surface *s,
-                    const struct rb_ref_bsdf *b, const float beta[3], float acc[3], uint64_t key,
-                    uint32_t dim, uint64_t *rays)
+                    const struct rb_ref_bsdf *b, const float beta[3], float acc[3],
+                    const struct rb_ref_rng *rng, uint32_t dim, uint64_t *rays)
 {
-    float l[3];
-    float pdf = rb_ref_env_sample(w->env, s->n, rb_ref_rand(key, dim + DIM_ENV_U),
-                                  rb_ref_rand(key, dim + DIM_ENV_V), l);
+    float l[3], u[2];
+    rb_ref_rand2(rng, dim + DIM_ENV_UV, u);
+    float pdf = rb_ref_env_sample(w->env, s->n, u[0], u[1], l);
     if (!(pdf > 0.0f))
         return;
     float f[3], le[3];
@@ -187,10 +231,9 @@ static void nee_env(const struct rb_ref_world *w, const struct rb_ref_surface *s
 }
 
 void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
-                         const float dir0[3], uint32_t pixel, uint32_t sample, float direct[3],
+                         const float dir0[3], const struct rb_ref_rng *rng, float direct[3],
                          float indirect[3], uint64_t *rays)
 {
-    uint64_t key = rb_ref_rand_key(w->frame, pixel, sample);
     struct rb_ref_surface s;
     rb_ref_surface_eval(w, hit->prim, hit->u, hit->v, dir0, &s);
     for (int i = 0; i < 3; i++)
@@ -211,25 +254,24 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
         bool do_area = has_area;
         bool do_env = has_env && (w->paths == RB_PATHS_FULL || k == 1);
         bool do_continue = k <= bounces;
-        uint32_t dim = k * DIMS_PER_VERTEX;
+        uint32_t dim = RB_REF_DIM_CAMERA_END + (k - 1) * DIMS_PER_VERTEX;
         float v[3] = {-dir[0], -dir[1], -dir[2]};
         struct rb_ref_bsdf b;
         rb_ref_bsdf_init(&b, &s, v);
 
         nee_punctual(w, &s, &b, beta, acc, rays);
         if (do_area)
-            nee_area(w, &s, &b, beta, acc, key, dim, rays);
+            nee_area(w, &s, &b, beta, acc, rng, dim, rays);
         if (do_env)
-            nee_env(w, &s, &b, beta, acc, key, dim, rays);
+            nee_env(w, &s, &b, beta, acc, rng, dim, rays);
         if (!do_continue && !do_area && !do_env)
             break;
 
         /* The BSDF sample: it finds emitters and the environment (MIS'd against the light
          * samples above) and, where allowed, the next vertex. */
-        float l[3], weight[3];
-        float pdf = rb_ref_bsdf_sample(&b, rb_ref_rand(key, dim + DIM_LOBE),
-                                       rb_ref_rand(key, dim + DIM_DIR0),
-                                       rb_ref_rand(key, dim + DIM_DIR1), l, weight);
+        float l[3], weight[3], u[2];
+        rb_ref_rand2(rng, dim + DIM_DIR, u);
+        float pdf = rb_ref_bsdf_sample(&b, rb_ref_rand(rng, dim + DIM_LOBE), u[0], u[1], l, weight);
         if (!(pdf > 0.0f) || is_black(weight))
             break;
         float org[3];
@@ -262,7 +304,7 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
             beta[i] *= weight[i];
         if (k > w->rr_depth) {
             float q = rb_clampf(rb_ref_maxf(beta[0], rb_ref_maxf(beta[1], beta[2])), 0.05f, 0.95f);
-            if (rb_ref_rand(key, dim + DIM_RR) >= q)
+            if (rb_ref_rand(rng, dim + DIM_RR) >= q)
                 break;
             for (int i = 0; i < 3; i++)
                 beta[i] /= q;

@@ -73,15 +73,16 @@ static bool env_is_black(const struct rb_job *job, const float *env_rgba, uint32
 {
     if (!(job->environment.intensity > 0.0f))
         return true;
-    if (!job->environment.map)
-        return !(job->environment.color[0] > 0.0f || job->environment.color[1] > 0.0f ||
-                 job->environment.color[2] > 0.0f);
-    if (!env_rgba)
-        return false; /* a map the caller did not pass: assume it lights the scene */
-    for (size_t i = 0; i < (size_t)w * h; i++)
-        if (env_rgba[i * 4] > 0.0f || env_rgba[i * 4 + 1] > 0.0f || env_rgba[i * 4 + 2] > 0.0f)
-            return false;
-    return true;
+    if (env_rgba) {
+        for (size_t i = 0; i < (size_t)w * h; i++)
+            if (env_rgba[i * 4] > 0.0f || env_rgba[i * 4 + 1] > 0.0f || env_rgba[i * 4 + 2] > 0.0f)
+                return false;
+        return true;
+    }
+    if (job->environment.map)
+        return false; /* a map the caller did not load: assume it lights the scene */
+    return !(job->environment.color[0] > 0.0f || job->environment.color[1] > 0.0f ||
+             job->environment.color[2] > 0.0f);
 }
 
 /* ---- rooms ---------------------------------------------------------------------------------- */
