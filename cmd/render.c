@@ -474,7 +474,7 @@ static int run(struct options *o, int argc, char **argv)
         }
         struct rb_render_frame_info info;
         if ((st = rb_render_frame(r, f, path, &info, &err))) {
-            cmd_error("frame %d: %s", f, err.msg);
+            cmd_error("%s", err.msg); /* it names the frame */
             rc = exit_for(st, true);
             break;
         }
@@ -485,18 +485,24 @@ static int run(struct options *o, int argc, char **argv)
             rc = RB_EXIT_FAILED;
             break;
         }
-        if (f == abort_after)
+        if (f == abort_after && rb_render_flush(r, &err) == RB_OK)
             kill(getpid(), SIGKILL);
         done++;
         rendered++;
         if (!o->quiet)
             progress(tty, done, total, f, (now_s() - started) / rendered, false);
         if (rendered == 1 && f < last &&
-            (st = rb_render_check_space(path, job->color.preview, last - f, &err))) {
+            ((st = rb_render_flush(r, &err)) ||
+             (st = rb_render_check_space(path, job->color.preview, last - f, &err)))) {
             cmd_error("%s", err.msg);
             rc = RB_EXIT_FAILED;
             break;
         }
+    }
+    /* The frames still with the writer (the one in flight when a signal came, too). */
+    if ((st = rb_render_flush(r, &err))) {
+        cmd_error("%s", err.msg);
+        rc = exit_for(st, true);
     }
     signal(SIGINT, SIG_DFL);
     signal(SIGTERM, SIG_DFL);

@@ -22,8 +22,12 @@ cat "$out"/frame.*.timing.json | tr '{' '\n' |
                    while (b >= 1 && v[p, b] > x) { v[p, b + 1] = v[p, b]; b-- } v[p, b + 1] = x }
                m = (c % 2) ? v[p, (c + 1) / 2] : (v[p, c / 2] + v[p, c / 2 + 1]) / 2;
                printf "pass %-10s median %8.3f ms gpu\n", p, m } }'
-cat "$out"/frame.*.timing.json | sed -n 's/.*"wall_ms": \([0-9.eE+-]*\).*/\1/p' | sort -g |
-    awk '{ v[++n] = $1 } END { printf "frame wall median %.1f ms\n", (n % 2) ? v[(n + 1) / 2] : (v[n / 2] + v[n / 2 + 1]) / 2 }'
+median() { sort -g | awk '{ v[++n] = $1 } END { print (n % 2) ? v[(n + 1) / 2] : (v[n / 2] + v[n / 2 + 1]) / 2 }'; }
+wall=$(cat "$out"/frame.*.timing.json | sed -n 's/.*"wall_ms": \([0-9.eE+-]*\).*/\1/p' | median)
+gpu=$(cat "$out"/frame.*.timing.json | sed -n 's/.*"gpu_total_ms": \([0-9.eE+-]*\).*/\1/p' | median)
+# wall_ms: rendering the frame and handing it to the writer thread, which compresses and writes
+# the previous frame meanwhile; the ratio is the frame's cost over its GPU passes (goal <= 1.3).
+awk -v w="$wall" -v g="$gpu" 'BEGIN { printf "frame wall median %.1f ms, GPU passes median %.1f ms: wall / GPU %.2f\n", w, g, w / g }'
 awk -v s="$start" -v e="$end" -v f="$frames" 'BEGIN { printf "frames per second (whole run, incl. start-up and EXR writes): %.2f\n", f / (e - s) }'
 echo "peak resident memory: $(cat "$out/rss") KiB"
 

@@ -63,6 +63,7 @@ struct rb_reference {
     const struct rb_job *job;
     const struct rb_scene *scene;
     struct rb_scene_setup setup; /* decided once for the job: bounds, default light */
+    struct rb_pass_time trace;   /* the result's one pass */
     uint32_t thread_count;
     bool is_hashed_sampler;
     bool use_box_filter; /* job: integrator.reference.pixel_filter box */
@@ -692,8 +693,8 @@ static uint64_t run_stage(struct rb_reference *ref, struct stage *st)
     return atomic_load(&st->rays);
 }
 
-enum rb_status rb_reference_render(struct rb_reference *ref, int frame,
-                                   struct rb_reference_result *out, struct rb_err *err)
+enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct rb_frame_result *out,
+                                   struct rb_err *err)
 {
     double start = now_s();
     double rate = ref->job->rate_fps > 0.0 ? ref->job->rate_fps : 1.0;
@@ -751,17 +752,21 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame,
         rb_log(RB_LOG_WARN, "frame %d: %u non-finite values (NaN or Inf) in the output", frame,
                nonfinite);
 
-    memset(out, 0, sizeof(*out));
-    out->frame = frame;
-    out->time_s = t;
-    out->width_px = ref->width_px;
-    out->height_px = ref->height_px;
-    out->pixels = ref->pixels;
-    out->spp = done;
-    out->ray_count = rays;
-    out->render_s = now_s() - trace_start;
-    out->world_to_camera = ref->cam.world_to_camera;
-    out->world_to_ndc = ref->world_to_ndc;
-    out->nonfinite_count = nonfinite;
+    ref->trace =
+        (struct rb_pass_time){.name = "trace", .cpu_ms = (now_s() - trace_start) * 1e3, .count = 1};
+    *out = (struct rb_frame_result){
+        .frame = frame,
+        .time_s = t,
+        .width_px = ref->width_px,
+        .height_px = ref->height_px,
+        .pixels = ref->pixels,
+        .passes = &ref->trace,
+        .pass_count = 1,
+        .world_to_camera = ref->cam.world_to_camera,
+        .world_to_ndc = ref->world_to_ndc,
+        .spp = done,
+        .ray_count = rays,
+        .nonfinite_count = nonfinite,
+    };
     return RB_OK;
 }

@@ -34,21 +34,6 @@ struct rb_reference_desc {
     void *user;
 };
 
-/* What one frame produced: RB_OUT_FLOATS floats per pixel in the RB_OUT_* order of
- * shaders/common/shared.h (beauty, direct, indirect, albedo, normal, depth, motion), rows top to
- * bottom; valid until the next render or destroy. */
-struct rb_reference_result {
-    int frame;
-    double time_s;
-    uint32_t width_px, height_px;
-    const float *pixels;
-    uint32_t spp;       /* samples per pixel reached (less than asked when a limit stopped it) */
-    uint64_t ray_count; /* rays traced (camera, bounce and shadow rays) */
-    double render_s;    /* wall time of the tracing */
-    struct rb_mat4 world_to_camera, world_to_ndc; /* as the GPU integrators write them */
-    uint32_t nonfinite_count; /* NaN or infinite floats in pixels (all layers); 0 when clean */
-};
-
 /* Builds the reference for the job and scene (Embree device, light tables). Fails with
  * RB_E_EXTERNAL for an Embree error, RB_E_NOMEM. */
 enum rb_status rb_reference_create(const struct rb_reference_desc *desc, struct rb_reference **out,
@@ -56,10 +41,13 @@ enum rb_status rb_reference_create(const struct rb_reference_desc *desc, struct 
 
 /* Renders one frame (time = frame / rate): evaluates the animation, deforms the geometry on the
  * CPU (skins, morphs, node transforms: the same math as the animate pass), rebuilds the BVH,
- * traces. NaN and infinite values are counted and logged as a warning, as the GPU integrators
- * do. Thread-safe only against itself: one render at a time per object. */
-enum rb_status rb_reference_render(struct rb_reference *ref, int frame,
-                                   struct rb_reference_result *out, struct rb_err *err);
+ * traces. The result is the GPU integrators' (core.h): its one pass, "trace", holds the tracing's
+ * wall time as cpu_ms; spp is the samples reached (fewer than asked when a limit or on_pass
+ * stopped it); ray_count counts camera, bounce and shadow rays. NaN and infinite values are
+ * counted and logged as a warning, as the GPU integrators do. Thread-safe only against itself:
+ * one render at a time per object. */
+enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct rb_frame_result *out,
+                                   struct rb_err *err);
 
 void rb_reference_destroy(struct rb_reference *ref);
 

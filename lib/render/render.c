@@ -1,10 +1,15 @@
 /* A run of a job: the renderer (the GPU frame driver or the CPU reference) behind one result
  * type, the --resume decision, and the frame's files. Layers go into the EXR in the order of
  * RB_OUT_* (shaders/common/shared.h); the metadata holds nothing that depends on the time of the
- * render, so equal pixels give equal bytes. */
+ * render, so equal pixels give equal bytes.
+ * Writing is off the critical path: a rendered frame is copied into one of QUEUE_DEPTH pending
+ * entries and written (layer split, EXR compression, preview, sidecar, atomic renames) by one
+ * writer thread, in frame order, while the next frame renders. A write error is reported by the
+ * next call that hands over a frame or flushes. */
 #include "render/render.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,6 +23,8 @@
 #include "reference/reference.h"
 #include "shared.h"
 
+#define QUEUE_DEPTH 2 /* frames rendered but not yet written, at most */
+
 struct rb_render {
     const struct rb_job *job;
     const struct rb_scene_setup *setup;
@@ -29,9 +36,29 @@ struct rb_render {
     bool was_stopped; /* on_pass said stop during this frame */
     char hash[17];    /* the setup's job hash, as the EXR records it */
     char device[256], driver[256];
-    struct rb_pass_time trace; /* the reference's one pass */
-    float *scratch;            /* the EXR's and the preview's layer copies */
+    float *scratch; /* the writer's copies of layers for the EXR and the preview */
+
+    /* the writer thread and the frames it has yet to write */
+    pthread_t writer;
+    bool has_writer, is_stopping;
+    pthread_mutex_t lock;
+    pthread_cond_t changed;
+    struct pending {
+        bool is_full;
+        char path[4096];
+        struct rb_frame_result f; /* pixels and passes point at the entry's own copies */
+        float *pixels;
+        struct rb_pass_time *passes;
+        uint32_t pass_cap;
+        double wall_ms;
+    } queue[QUEUE_DEPTH];
+    uint32_t head, count;    /* the oldest pending entry, and how many are full */
+    enum rb_status write_st; /* the writer's first failure, RB_OK until then */
+    struct rb_err write_err; /* its message */
+    int write_frame;         /* the frame it failed on */
 };
+
+static void *writer_main(void *arg);
 
 static bool on_reference_pass(void *user, uint32_t done, uint32_t total)
 {
@@ -97,6 +124,21 @@ enum rb_status rb_render_create(const struct rb_render_desc *desc, struct rb_ren
     }
     if (st)
         goto fail;
+    for (int q = 0; q < QUEUE_DEPTH; q++)
+        if (!(r->queue[q].pixels =
+                  malloc((size_t)job->width_px * job->height_px * RB_OUT_FLOATS * sizeof(float)))) {
+            st = rb_errf(err, RB_E_NOMEM, "out of memory for the frames waiting to be written");
+            goto fail;
+        }
+    pthread_mutex_init(&r->lock, NULL);
+    pthread_cond_init(&r->changed, NULL);
+    if (pthread_create(&r->writer, NULL, writer_main, r) != 0) {
+        pthread_cond_destroy(&r->changed);
+        pthread_mutex_destroy(&r->lock);
+        st = rb_errf(err, RB_E_NOMEM, "cannot start the writer thread");
+        goto fail;
+    }
+    r->has_writer = true;
     *out = r;
     return RB_OK;
 fail:
@@ -108,6 +150,19 @@ void rb_render_destroy(struct rb_render *r)
 {
     if (!r)
         return;
+    if (r->has_writer) {
+        pthread_mutex_lock(&r->lock);
+        r->is_stopping = true; /* the writer finishes what is queued, then ends */
+        pthread_cond_broadcast(&r->changed);
+        pthread_mutex_unlock(&r->lock);
+        pthread_join(r->writer, NULL);
+        pthread_cond_destroy(&r->changed);
+        pthread_mutex_destroy(&r->lock);
+    }
+    for (int q = 0; q < QUEUE_DEPTH; q++) {
+        free(r->queue[q].pixels);
+        free(r->queue[q].passes);
+    }
     rb_reference_destroy(r->ref);
     rb_integrator_destroy(r->it);
     rb_gpu_destroy(r->gpu);
@@ -266,28 +321,100 @@ static double now_s(void)
     return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
-/* The reference's result as the common frame result. */
-static enum rb_status render_reference(struct rb_render *r, int frame, struct rb_frame_result *out,
-                                       struct rb_err *err)
+/* ---- the writer ------------------------------------------------------------------------------ */
+
+static void *writer_main(void *arg)
 {
-    struct rb_reference_result ref;
-    enum rb_status st = rb_reference_render(r->ref, frame, &ref, err);
-    if (st)
-        return st;
-    r->trace = (struct rb_pass_time){.name = "trace", .cpu_ms = ref.render_s * 1e3, .count = 1};
-    *out = (struct rb_frame_result){.frame = ref.frame,
-                                    .time_s = ref.time_s,
-                                    .width_px = ref.width_px,
-                                    .height_px = ref.height_px,
-                                    .pixels = ref.pixels,
-                                    .passes = &r->trace,
-                                    .pass_count = 1,
-                                    .world_to_camera = ref.world_to_camera,
-                                    .world_to_ndc = ref.world_to_ndc,
-                                    .spp = ref.spp,
-                                    .ray_count = ref.ray_count,
-                                    .nonfinite_count = ref.nonfinite_count};
-    return RB_OK;
+    struct rb_render *r = arg;
+    pthread_mutex_lock(&r->lock);
+    for (;;) {
+        while (!r->count && !r->is_stopping)
+            pthread_cond_wait(&r->changed, &r->lock);
+        if (!r->count)
+            break; /* stopping, and nothing left to write */
+        struct pending *e = &r->queue[r->head];
+        pthread_mutex_unlock(&r->lock);
+        /* The entry is the writer's until it is emptied; the scratch is the writer's alone. */
+        struct rb_err err = RB_ERR_INIT;
+        enum rb_status st = RB_OK;
+        if (r->write_st == RB_OK) /* after a failure, nothing more is written */
+            (void)((st = rb_io_make_parent_dirs(e->path, &err)) ||
+                   (st = write_exr(r, e->path, &e->f, &err)) ||
+                   (r->job->color.preview && (st = write_preview(r, e->path, &e->f, &err))) ||
+                   (st = write_timing(r, e->path, &e->f, e->wall_ms, &err)));
+        pthread_mutex_lock(&r->lock);
+        if (st && r->write_st == RB_OK) {
+            r->write_st = st;
+            r->write_err = err;
+            r->write_frame = e->f.frame;
+        }
+        e->is_full = false;
+        r->head = (r->head + 1) % QUEUE_DEPTH;
+        r->count--;
+        pthread_cond_broadcast(&r->changed);
+    }
+    pthread_mutex_unlock(&r->lock);
+    return NULL;
+}
+
+/* The writer's failure, as the caller's: "frame N: <message>". Call with the lock held. */
+static enum rb_status write_failure(struct rb_render *r, struct rb_err *err)
+{
+    return rb_errf(err, r->write_st, "frame %d: %s", r->write_frame, r->write_err.msg);
+}
+
+enum rb_status rb_render_flush(struct rb_render *r, struct rb_err *err)
+{
+    if (!r || !r->has_writer)
+        return RB_OK;
+    pthread_mutex_lock(&r->lock);
+    while (r->count)
+        pthread_cond_wait(&r->changed, &r->lock);
+    enum rb_status st = r->write_st ? write_failure(r, err) : RB_OK;
+    pthread_mutex_unlock(&r->lock);
+    return st;
+}
+
+/* Copies the frame into a free entry (waiting for the writer when both are full). */
+static enum rb_status hand_over(struct rb_render *r, const char *path,
+                                const struct rb_frame_result *f, double wall_ms, struct rb_err *err)
+{
+    pthread_mutex_lock(&r->lock);
+    while (r->count == QUEUE_DEPTH && !r->write_st)
+        pthread_cond_wait(&r->changed, &r->lock);
+    enum rb_status st = RB_OK;
+    if (r->write_st) {
+        st = write_failure(r, err);
+        goto out;
+    }
+    struct pending *e = &r->queue[(r->head + r->count) % QUEUE_DEPTH];
+    if (f->pass_count > e->pass_cap) {
+        struct rb_pass_time *p = realloc(e->passes, f->pass_count * sizeof(*p));
+        if (!p) {
+            st = rb_errf(err, RB_E_NOMEM, "frame %d: out of memory for its pass timings", f->frame);
+            goto out;
+        }
+        e->passes = p;
+        e->pass_cap = f->pass_count;
+    }
+    if (rb_strlcpy(e->path, path, sizeof(e->path)) >= sizeof(e->path)) {
+        st = rb_errf(err, RB_E_INVALID, "frame %d: path too long: '%s'", f->frame, path);
+        goto out;
+    }
+    memcpy(e->pixels, f->pixels,
+           (size_t)f->width_px * f->height_px * RB_OUT_FLOATS * sizeof(float));
+    if (f->pass_count)
+        memcpy(e->passes, f->passes, f->pass_count * sizeof(*e->passes));
+    e->f = *f;
+    e->f.pixels = e->pixels;
+    e->f.passes = e->passes;
+    e->wall_ms = wall_ms;
+    e->is_full = true;
+    r->count++;
+    pthread_cond_broadcast(&r->changed);
+out:
+    pthread_mutex_unlock(&r->lock);
+    return st;
 }
 
 enum rb_status rb_render_frame(struct rb_render *r, int frame, const char *path,
@@ -296,21 +423,20 @@ enum rb_status rb_render_frame(struct rb_render *r, int frame, const char *path,
     double t0 = now_s();
     struct rb_frame_result f;
     r->was_stopped = false;
-    enum rb_status st =
-        r->ref ? render_reference(r, frame, &f, err) : rb_integrator_render(r->it, frame, &f, err);
-    if (st)
+    enum rb_status st = r->ref ? rb_reference_render(r->ref, frame, &f, err)
+                               : rb_integrator_render(r->it, frame, &f, err);
+    if (st) {
+        rb_err_prefix(err, "frame %d", frame);
         return st;
+    }
     *info = (struct rb_render_frame_info){.is_partial = r->was_stopped &&
                                                         f.spp < r->job->integrator.reference.spp,
                                           .spp = f.spp,
                                           .nonfinite_count = f.nonfinite_count};
     if (info->is_partial)
         return RB_OK; /* never under the frame's name: --resume renders it again */
-    if ((st = rb_io_make_parent_dirs(path, err)) || (st = write_exr(r, path, &f, err)) ||
-        (r->job->color.preview && (st = write_preview(r, path, &f, err))))
-        return st;
     info->wall_ms = (now_s() - t0) * 1e3;
-    return write_timing(r, path, &f, info->wall_ms, err);
+    return hand_over(r, path, &f, info->wall_ms, err);
 }
 
 /* ---- space, environment -----------------------------------------------------------------------

@@ -32,6 +32,7 @@ struct rb_render_desc {
  * renderer cannot take; *out only on success. */
 enum rb_status rb_render_create(const struct rb_render_desc *desc, struct rb_render **out,
                                 struct rb_err *err);
+/* Writes what is still queued (failures are lost: flush first to see them), then frees. */
 void rb_render_destroy(struct rb_render *r);
 
 /* The device and driver the frames are rendered with, for the sidecar and messages. */
@@ -55,14 +56,20 @@ struct rb_render_frame_info {
     bool is_partial; /* the reference was stopped (on_pass returned false): nothing written */
     uint32_t spp;    /* the reference's samples reached; 0 for the GPU */
     uint32_t nonfinite_count;
-    double wall_ms;
+    double wall_ms; /* rendering it and handing it to the writer (the sidecar's wall_ms) */
 };
 
-/* Renders frame f and writes path (EXR), its timing sidecar and, when the job asks for
- * previews, its PNG. A partial frame is not written. Fails with the renderer's or the writer's
- * status; a file is either complete or absent. */
+/* Renders frame f and hands it to the writer thread, which writes path (EXR), its timing
+ * sidecar and, when the job asks for previews, its PNG, in frame order, while the caller renders
+ * the next frame (at most two frames wait). A partial frame is not written. Fails with the
+ * renderer's status, or with an earlier frame's write failure ("frame N: ..."); a file is
+ * either complete or absent. */
 enum rb_status rb_render_frame(struct rb_render *r, int frame, const char *path,
                                struct rb_render_frame_info *info, struct rb_err *err);
+
+/* Waits until every frame handed over is written; the first write failure, if any. Callers
+ * flush before they rely on the files (a space check, the closing line); destroy flushes too. */
+enum rb_status rb_render_flush(struct rb_render *r, struct rb_err *err);
 
 /* After the first frame written at path: RB_E_IO when frames_left more frames of that size
  * (EXR, sidecar, preview) would not fit on the output's file system, with 5% to spare. */

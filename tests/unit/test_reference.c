@@ -224,7 +224,7 @@ static struct rb_reference *ref_new(const struct rb_job *job, const struct rb_sc
 }
 
 /* Renders frame and returns a copy of the pixels (free it). */
-static float *render(struct rb_reference *ref, int frame, struct rb_reference_result *res)
+static float *render(struct rb_reference *ref, int frame, struct rb_frame_result *res)
 {
     struct rb_err err = RB_ERR_INIT;
     if (rb_reference_render(ref, frame, res, &err))
@@ -237,7 +237,7 @@ static float *render(struct rb_reference *ref, int frame, struct rb_reference_re
 }
 
 /* The camera ray through the point (sx, sy) of the image, in pixels (pixel x spans [x, x + 1)). */
-static void image_ray(const struct rb_reference_result *r, float sx, float sy, struct rb_vec3 *org,
+static void image_ray(const struct rb_frame_result *r, float sx, float sy, struct rb_vec3 *org,
                       struct rb_vec3 *dir)
 {
     struct rb_mat4 inv = rb_mat4_inverse(&r->world_to_ndc, NULL);
@@ -250,13 +250,13 @@ static void image_ray(const struct rb_reference_result *r, float sx, float sy, s
 }
 
 /* The camera ray through the centre of pixel (x, y), as the reference defines it. */
-static void pixel_ray(const struct rb_reference_result *r, uint32_t x, uint32_t y,
-                      struct rb_vec3 *org, struct rb_vec3 *dir)
+static void pixel_ray(const struct rb_frame_result *r, uint32_t x, uint32_t y, struct rb_vec3 *org,
+                      struct rb_vec3 *dir)
 {
     image_ray(r, (float)x + 0.5f, (float)y + 0.5f, org, dir);
 }
 
-static const float *px_at(const float *pixels, const struct rb_reference_result *r, uint32_t x,
+static const float *px_at(const float *pixels, const struct rb_frame_result *r, uint32_t x,
                           uint32_t y)
 {
     return pixels + ((size_t)y * r->width_px + x) * RB_OUT_FLOATS;
@@ -267,7 +267,7 @@ static const float *px_at(const float *pixels, const struct rb_reference_result 
 struct stats {
     double *mean, *sem; /* width * height * 3 */
     float *first;       /* frame 0's pixels, for the AOVs */
-    struct rb_reference_result r;
+    struct rb_frame_result r;
 };
 
 static void frame_stats(struct rb_reference *ref, int frames, struct stats *st)
@@ -275,7 +275,7 @@ static void frame_stats(struct rb_reference *ref, int frames, struct stats *st)
     double *sum = NULL, *sum2 = NULL;
     size_t n = 0;
     for (int f = 0; f < frames; f++) {
-        struct rb_reference_result r;
+        struct rb_frame_result r;
         float *p = render(ref, f, &r);
         if (f == 0) {
             n = (size_t)r.width_px * r.height_px * 3;
@@ -825,7 +825,7 @@ static void test_environment_map(void **state)
                 .job = job, .scene = s, .env_rgba = map, .env_width_px = W, .env_height_px = H},
             &ref, &err),
         RB_OK);
-    struct rb_reference_result r;
+    struct rb_frame_result r;
     float *px = render(ref, 0, &r);
     uint32_t misses = 0;
     for (uint32_t y = 0; y < r.height_px; y++)
@@ -995,7 +995,7 @@ static void check_direct(const char *lights_yaml, const struct test_light *light
         "integrator: {name: reference, reference: {spp: 2, paths: direct}}\n",
         lights_yaml);
     struct rb_reference *ref = ref_new(job, ds.s, 2);
-    struct rb_reference_result r;
+    struct rb_frame_result r;
     float *px = render(ref, 0, &r);
     uint32_t lit = 0, shadowed = 0, misses = 0, opaque = 0;
     for (uint32_t y = 0; y < r.height_px; y++)
@@ -1317,7 +1317,7 @@ static void test_materials(void **state)
                 "{type: directional, direction: [-0.9, 0, 0.2], intensity: 5}]\n"
                 "integrator: {name: reference, reference: {spp: 1, paths: direct}}\n");
     struct rb_reference *ref = ref_new(job, s, 2);
-    struct rb_reference_result r;
+    struct rb_frame_result r;
     float *px = render(ref, 0, &r);
     uint32_t seen[6] = {0};
     for (uint32_t y = 0; y < r.height_px; y++)
@@ -1462,7 +1462,7 @@ static void test_skin(void **state)
             s->nodes[node].scale = stretch;
         }
         struct rb_reference *ref = ref_new(job, s, 1);
-        struct rb_reference_result r;
+        struct rb_frame_result r;
         float *px = render(ref, 0, &r);
         struct rb_vec3 c = rb_mat4_point(&T, rb_v3(0, 0, 0)), nz = rb_mat4_dir(&T, rb_v3(0, 0, 1));
         /* normals: (R S)^-T n = R S^-1 n */
@@ -1555,7 +1555,7 @@ static void test_motion_and_morph(void **state)
                 "lights: [{type: point, position: [0, 0, 3], intensity: 1}]\n"
                 "integrator: {name: reference, reference: {spp: 1, paths: direct}}\n");
     struct rb_reference *ref = ref_new(job, s, 1);
-    struct rb_reference_result r;
+    struct rb_frame_result r;
     float *px = render(ref, 12, &r);
     const float dx = 1.0f / 24.0f; /* the wall's move since frame 11 */
     uint32_t moving = 0, morphed = 0;
@@ -1632,7 +1632,7 @@ static void test_pixel_filter(void **state)
     assert_true(jc->hash != jb->hash);
     struct rb_reference *rc = ref_new(jc, s, 2), *rb1 = ref_new(jb, s, 1);
     struct rb_reference *rb2 = ref_new(jb, s, 2), *rb3 = ref_new(jb, s, 3);
-    struct rb_reference_result r;
+    struct rb_frame_result r;
     float *pc = render(rc, 0, &r), *pb = render(rb1, 0, &r);
     float *pb2 = render(rb2, 0, &r), *pb3 = render(rb3, 0, &r);
     size_t n = (size_t)r.width_px * r.height_px;
@@ -1735,7 +1735,7 @@ static void test_determinism(void **state)
     (void)state;
     struct rb_scene *s = busy_scene();
     struct rb_job *job = job_new(BUSY_JOB, 32, 24, 8);
-    struct rb_reference_result r1, r2, r3;
+    struct rb_frame_result r1, r2, r3;
     struct rb_reference *a = ref_new(job, s, 1), *b = ref_new(job, s, 2);
     float *p1 = render(a, 1, &r1), *p2 = render(b, 1, &r2);
     free(render(b, 0, &r3)); /* another frame in between changes nothing */
@@ -1749,7 +1749,7 @@ static void test_determinism(void **state)
     assert_true(r1.ray_count > (uint64_t)r1.width_px * r1.height_px * 8);
     assert_int_equal(r1.spp, 8);
     /* and the frame number changes the noise */
-    struct rb_reference_result r0;
+    struct rb_frame_result r0;
     float *p0 = render(a, 0, &r0);
     assert_true(memcmp(p0, p1, bytes) != 0);
     free(p0);
@@ -1774,7 +1774,7 @@ static void test_determinism(void **state)
     rb_scene_destroy(s);
 }
 
-static double rmse(const float *a, const float *b, const struct rb_reference_result *r)
+static double rmse(const float *a, const float *b, const struct rb_frame_result *r)
 {
     double sum = 0.0;
     size_t n = (size_t)r->width_px * r->height_px;
@@ -1799,7 +1799,7 @@ static void test_convergence(void **state)
     struct rb_reference *a = ref_new_sampler(j16, s, 2, hash),
                         *b = ref_new_sampler(j64, s, 2, hash),
                         *c = ref_new_sampler(j1k, s, 2, hash);
-    struct rb_reference_result r16, r64, r1k;
+    struct rb_frame_result r16, r64, r1k;
     /* The reference is frame 1, whose random numbers are independent of frame 0's, so
      * E[RMSE^2] = s^2 (1/n + 1/1024): the expected ratio is sqrt((1/64 + 1/1024) /
      * (1/16 + 1/1024)) = 0.511. */
@@ -1839,7 +1839,7 @@ static double floor_error(const struct rb_scene *s, const double tri[3][3], uint
     double sum = 0.0;
     uint32_t n = 0;
     for (int f = 0; f < 4; f++) {
-        struct rb_reference_result r;
+        struct rb_frame_result r;
         float *px = render(ref, f, &r);
         for (uint32_t y = 0; y < r.height_px; y++)
             for (uint32_t x = 0; x < r.width_px; x++) {
@@ -1912,7 +1912,7 @@ static struct rb_scene *busy_scene_lamp(float emission)
 }
 
 static float *render_job(const struct rb_scene *s, const char *paths, int bounces, float env,
-                         struct rb_reference_result *r)
+                         struct rb_frame_result *r)
 {
     struct rb_job *job = job_new(
         "resolution: [24, 20]\n"
@@ -1934,7 +1934,7 @@ static void test_path_spaces(void **state)
 {
     (void)state;
     struct rb_scene *lit = busy_scene_lamp(1.0f), *dark = busy_scene_lamp(0.0f);
-    struct rb_reference_result r;
+    struct rb_frame_result r;
     size_t n = 24 * 20;
     const char *spaces[2] = {"direct", "bdpt"};
     for (int k = 0; k < 2; k++) {
@@ -2020,7 +2020,7 @@ static void test_passes(void **state)
                 .job = job, .scene = s, .thread_count = 2, .on_pass = on_pass, .user = &log},
             &ref, &err),
         RB_OK);
-    struct rb_reference_result r;
+    struct rb_frame_result r;
     float *full = render(ref, 0, &r);
     static const uint32_t want[] = {1, 2, 4, 8, 16, 32, 40};
     assert_int_equal(log.calls, 7);
@@ -2028,7 +2028,7 @@ static void test_passes(void **state)
     for (int i = 0; i < 7; i++)
         assert_int_equal(log.done[i], want[i]);
     assert_int_equal(r.spp, 40);
-    assert_true(r.render_s >= 0.0 && r.ray_count > 0);
+    assert_true(r.pass_count == 1 && r.passes[0].cpu_ms >= 0.0 && r.ray_count > 0);
     /* stopping after the third pass leaves 4 samples: the same as asking for 4 */
     log = (struct pass_log){.stop_after = 3};
     float *stopped = render(ref, 0, &r);
@@ -2036,7 +2036,7 @@ static void test_passes(void **state)
     assert_int_equal(log.calls, 3);
     struct rb_job *j4 = job_new(BUSY_JOB, 8, 8, 4);
     struct rb_reference *ref4 = ref_new(j4, s, 1);
-    struct rb_reference_result r4;
+    struct rb_frame_result r4;
     float *four = render(ref4, 0, &r4);
     assert_memory_equal(stopped, four, (size_t)8 * 8 * RB_OUT_FLOATS * sizeof(float));
     assert_true(memcmp(stopped, full, (size_t)8 * 8 * RB_OUT_FLOATS * sizeof(float)) != 0);
