@@ -199,9 +199,14 @@ struct rb_gpu_list_counter rb_view_list_usage(const struct rb_view_list *list);
 enum rb_status rb_view_list_check(const struct rb_view_list *list, const char *name,
                                   struct rb_err *err);
 
+/* ---- shadow.c: the direct light's shadow maps, as raster views ------------------------------ */
+
 struct rb_pass_shadow;
 enum rb_status rb_pass_shadow_create(struct rb_gpu *gpu, struct rb_pass_shadow **out,
                                      struct rb_err *err);
+/* Renders frame->shadow_layer_count layers of frame->shadow_maps from frame->shadow_views. Reads
+ * the views' kinds from the host copy of frame->shadow_views, so it records after they are
+ * written for the frame. */
 void rb_pass_shadow_record(struct rb_pass_shadow *p, VkCommandBuffer cmd,
                            const struct rb_frame *frame, const struct rb_frame_slot *cur);
 void rb_pass_shadow_destroy(struct rb_pass_shadow *p);
