@@ -53,7 +53,7 @@ CMD_C := $(sort $(wildcard cmd/*.c))
 LIB_OBJ := $(LIB_C:%.c=$(BUILD)/%.o) $(LIB_CXX:%.cpp=$(BUILD)/%.o)
 CMD_OBJ := $(CMD_C:%.c=$(BUILD)/%.o)
 
-SHADERS := $(sort $(wildcard shaders/*.vert shaders/*.frag shaders/*.comp shaders/*.geom))
+SHADERS := $(sort $(wildcard shaders/*.vert shaders/*.tesc shaders/*.tese shaders/*.frag shaders/*.comp shaders/*.geom))
 SPV_H := $(SHADERS:shaders/%=$(BUILD)/shaders/%.h)
 
 UNIT_SRC := $(sort $(wildcard tests/unit/test_*.c))

@@ -4,6 +4,7 @@
 #include "gpu/gpu_int.h"
 
 #include <ctype.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -13,6 +14,21 @@
 static const char *const required_extensions[] = {
     VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME,
 };
+
+/* Vulkan 1.0 features, checked and enabled by name: tessellation for the paraboloid views'
+ * curved edges, fragment-stage stores and atomics for the linked-list views. */
+static const struct {
+    size_t offset;
+    const char *name;
+} required_features[] = {
+    {offsetof(VkPhysicalDeviceFeatures, tessellationShader), "tessellationShader"},
+    {offsetof(VkPhysicalDeviceFeatures, fragmentStoresAndAtomics), "fragmentStoresAndAtomics"},
+};
+
+static VkBool32 *feature(VkPhysicalDeviceFeatures *f, size_t i)
+{
+    return (VkBool32 *)((char *)f + required_features[i].offset);
+}
 
 const char *rb_gpu_result_name(VkResult vr)
 {
@@ -154,6 +170,9 @@ static void missing_requirements(VkPhysicalDevice phys, char *out, size_t size)
             MISSING("dynamicRendering");
         if (!f13.synchronization2)
             MISSING("synchronization2");
+        for (size_t i = 0; i < sizeof(required_features) / sizeof(required_features[0]); i++)
+            if (!*feature(&f2.features, i))
+                MISSING("%s", required_features[i].name);
     }
     uint32_t qn = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(phys, &qn, NULL);
@@ -345,6 +364,8 @@ enum rb_status rb_gpu_create(const struct rb_gpu_desc *desc, struct rb_gpu **out
         .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2,
         .pNext = &f13,
     };
+    for (size_t i = 0; i < sizeof(required_features) / sizeof(required_features[0]); i++)
+        *feature(&f2.features, i) = VK_TRUE;
     VkDeviceCreateInfo dci = {
         .sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO,
         .pNext = &f2,
@@ -516,8 +537,10 @@ enum rb_status rb_gpu_print_devices(FILE *f, struct rb_err *err)
         fprintf(f, "    timestamp period: %g ns\n", p.limits.timestampPeriod);
         fprintf(f, "    max storage buffer range: %u bytes\n", p.limits.maxStorageBufferRange);
         fprintf(f, "    max color attachments: %u\n", p.limits.maxColorAttachments);
-        fprintf(f, "    uses: Vulkan 1.3, dynamicRendering, synchronization2, %s\n",
-                VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME);
+        fprintf(f, "    uses: Vulkan 1.3, dynamicRendering, synchronization2");
+        for (size_t k = 0; k < sizeof(required_features) / sizeof(required_features[0]); k++)
+            fprintf(f, ", %s", required_features[k].name);
+        fprintf(f, ", %s\n", VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME);
         fprintf(f, "    usable: %s%s\n", missing[0] ? "no, lacks " : "yes", missing);
     }
     free(devs);

@@ -242,6 +242,11 @@ enum rb_status rb_gpu_compute_pipeline(struct rb_gpu *gpu, const uint32_t *spv, 
 struct rb_gpu_graphics_desc {
     const uint32_t *vert;
     size_t vert_bytes;
+    const uint32_t *tesc; /* NULL: no tessellation; else tese too, and patches of triangles */
+    size_t tesc_bytes;
+    const uint32_t *tese;
+    size_t tese_bytes;
+    uint32_t patch_control_points; /* 0 == 3 (a triangle per patch) */
     const uint32_t *frag;
     size_t frag_bytes;
     VkPipelineLayout layout;

@@ -161,16 +161,50 @@ enum rb_status rb_gpu_compute_pipeline(struct rb_gpu *gpu, const uint32_t *spv, 
     return RB_OK;
 }
 
+/* Tessellation, when d->tesc is set: its control and evaluation stages go after stages[*count]
+ * (the vertex and fragment stages), and *ts says how many vertices make a patch. The caller
+ * destroys mods[] whether or not this fails. */
+static enum rb_status tessellation_stages(struct rb_gpu *gpu, const struct rb_gpu_graphics_desc *d,
+                                          VkShaderModule mods[2],
+                                          VkPipelineShaderStageCreateInfo *stages, uint32_t *count,
+                                          VkPipelineTessellationStateCreateInfo *ts,
+                                          struct rb_err *err)
+{
+    if (!d->tese)
+        RB_BUG("pipeline '%s': a tessellation control stage without an evaluation stage",
+               d->debug_name ? d->debug_name : "?");
+    enum rb_status st = make_module(gpu, d->tesc, d->tesc_bytes, d->debug_name, &mods[0], err);
+    if (st == RB_OK)
+        st = make_module(gpu, d->tese, d->tese_bytes, d->debug_name, &mods[1], err);
+    if (st)
+        return st;
+    static const VkShaderStageFlagBits kinds[2] = {VK_SHADER_STAGE_TESSELLATION_CONTROL_BIT,
+                                                   VK_SHADER_STAGE_TESSELLATION_EVALUATION_BIT};
+    for (int i = 0; i < 2; i++)
+        stages[(*count)++] = (VkPipelineShaderStageCreateInfo){
+            .sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
+            .stage = kinds[i],
+            .module = mods[i],
+            .pName = "main",
+        };
+    *ts = (VkPipelineTessellationStateCreateInfo){
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_TESSELLATION_STATE_CREATE_INFO,
+        .patchControlPoints = d->patch_control_points ? d->patch_control_points : 3,
+    };
+    return RB_OK;
+}
+
 enum rb_status rb_gpu_graphics_pipeline(struct rb_gpu *gpu, const struct rb_gpu_graphics_desc *d,
                                         VkPipeline *out, struct rb_err *err)
 {
-    VkShaderModule vs = VK_NULL_HANDLE, fs = VK_NULL_HANDLE;
+    VkShaderModule vs = VK_NULL_HANDLE, fs = VK_NULL_HANDLE, tess[2] = {VK_NULL_HANDLE};
+    VkPipelineTessellationStateCreateInfo ts = {0};
     enum rb_status st = make_module(gpu, d->vert, d->vert_bytes, d->debug_name, &vs, err);
     if (st == RB_OK)
         st = make_module(gpu, d->frag, d->frag_bytes, d->debug_name, &fs, err);
     if (st)
         goto out;
-    VkPipelineShaderStageCreateInfo stages[2] = {
+    VkPipelineShaderStageCreateInfo stages[4] = {
         {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
          .stage = VK_SHADER_STAGE_VERTEX_BIT,
          .module = vs,
@@ -180,11 +214,15 @@ enum rb_status rb_gpu_graphics_pipeline(struct rb_gpu *gpu, const struct rb_gpu_
          .module = fs,
          .pName = "main"},
     };
+    uint32_t stage_count = 2;
+    if (d->tesc && (st = tessellation_stages(gpu, d, tess, stages, &stage_count, &ts, err)))
+        goto out;
     VkPipelineVertexInputStateCreateInfo vi = {
         .sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
     VkPipelineInputAssemblyStateCreateInfo ia = {
         .sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO,
-        .topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST};
+        .topology =
+            d->tesc ? VK_PRIMITIVE_TOPOLOGY_PATCH_LIST : VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST};
     VkPipelineViewportStateCreateInfo vp = {
         .sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO,
         .viewportCount = 1,
@@ -225,10 +263,11 @@ enum rb_status rb_gpu_graphics_pipeline(struct rb_gpu *gpu, const struct rb_gpu_
                                         .depthAttachmentFormat = d->depth_format};
     VkGraphicsPipelineCreateInfo ci = {.sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO,
                                        .pNext = &ri,
-                                       .stageCount = 2,
+                                       .stageCount = stage_count,
                                        .pStages = stages,
                                        .pVertexInputState = &vi,
                                        .pInputAssemblyState = &ia,
+                                       .pTessellationState = d->tesc ? &ts : NULL,
                                        .pViewportState = &vp,
                                        .pRasterizationState = &rs,
                                        .pMultisampleState = &ms,
@@ -246,6 +285,9 @@ out:
         vkDestroyShaderModule(gpu->device, vs, NULL);
     if (fs)
         vkDestroyShaderModule(gpu->device, fs, NULL);
+    for (int i = 0; i < 2; i++)
+        if (tess[i])
+            vkDestroyShaderModule(gpu->device, tess[i], NULL);
     return st;
 }
 

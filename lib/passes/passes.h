@@ -7,6 +7,7 @@
 #include "gpu/gpu.h"
 #include "scene/scene.h"
 #include "shared.h"
+#include "view_shared.h"
 
 _Static_assert(sizeof(struct rb_gpu_globals) == 400, "globals layout");
 _Static_assert(sizeof(struct rb_gpu_vertex) == 64, "vertex layout");
@@ -14,6 +15,10 @@ _Static_assert(sizeof(struct rb_gpu_instance) == 160, "instance layout");
 _Static_assert(sizeof(struct rb_gpu_material) == 80, "material layout");
 _Static_assert(sizeof(struct rb_gpu_light) == 64, "light layout");
 _Static_assert(sizeof(struct rb_gpu_shadow_view) == 96, "shadow view layout");
+_Static_assert(sizeof(struct rb_gpu_view) == 96, "view layout");
+_Static_assert(sizeof(struct rb_gpu_view_push) == 48, "view push constants");
+_Static_assert(sizeof(struct rb_gpu_list_node) == 12, "list node layout");
+_Static_assert(sizeof(struct rb_gpu_list_counter) == 16, "list counter layout");
 _Static_assert(sizeof(struct rb_scene_vertex) == RB_SRC_VERTEX_FLOATS * 4, "source vertex");
 _Static_assert(sizeof(struct rb_scene_morph_delta) == RB_MORPH_DELTA_FLOATS * 4, "morph delta");
 
@@ -93,9 +98,116 @@ void rb_pass_gbuffer_record(struct rb_pass_gbuffer *p, VkCommandBuffer cmd,
                             const struct rb_frame_slot *prev);
 void rb_pass_gbuffer_destroy(struct rb_pass_gbuffer *p);
 
+/* ---- raster views (view.c): the scene from many views, each into a layer ------------------- */
+
+enum rb_view_kind {
+    RB_VIEW_KIND_INVALID = 0,
+    RB_VIEW_KIND_PERSPECTIVE = RB_VIEW_PERSPECTIVE,   /* a pinhole: shadow maps, RSM faces */
+    RB_VIEW_KIND_ORTHOGRAPHIC = RB_VIEW_ORTHOGRAPHIC, /* parallel: ray-bundles, directional */
+    RB_VIEW_KIND_PARABOLOID = RB_VIEW_PARABOLOID,     /* a hemisphere: VPL shadow maps */
+};
+
+enum rb_view_output {
+    RB_VIEW_OUTPUT_INVALID = 0,
+    RB_VIEW_OUTPUT_DEPTH, /* the view depth into an R32F layer (all kinds) */
+    RB_VIEW_OUTPUT_RSM,   /* position, normal, flux into RGBA32F layers (perspective, ortho) */
+    RB_VIEW_OUTPUT_LIST,  /* every fragment into a per-pixel linked list (perspective, ortho) */
+};
+
+/* The formats of the reflective-shadow-map attachments: position, normal, flux. */
+extern const VkFormat rb_view_rsm_formats[3];
+
+/* The views a pass will record: each (kind, output) pair it is asked for gets a pipeline. */
+struct rb_view_variant {
+    enum rb_view_kind kind;
+    enum rb_view_output output;
+};
+
+struct rb_pass_view_desc {
+    const struct rb_view_variant *variants;
+    uint32_t variant_count;
+    const char *debug_name; /* NULL == "view" */
+};
+
+/* A per-pixel linked list of fragments for each layer (seed 000, B.2): a head image and one node
+ * pool that a batch's views share. */
+struct rb_view_list {
+    struct rb_gpu_image heads;    /* R32_UINT array: a pixel's first node, RB_NONE when empty */
+    struct rb_gpu_buffer nodes;   /* struct rb_gpu_list_node [capacity_nodes] */
+    struct rb_gpu_buffer counter; /* struct rb_gpu_list_counter, host-visible */
+    uint32_t capacity_nodes;      /* how many nodes a batch may write; the rest are counted */
+};
+
+struct rb_view_list_desc {
+    uint32_t width_px, height_px;
+    uint32_t layer_count;    /* 0 == 1 */
+    uint32_t capacity_nodes; /* required */
+    const char *debug_name;  /* NULL == "view list" */
+};
+
+/* One batch: views[first_view + i] renders into layer first_layer + i, for i < view_count, in
+ * one go (one pipeline, one set of bindings). */
+struct rb_view_batch {
+    enum rb_view_kind kind;
+    enum rb_view_output output;
+    const struct rb_gpu_buffer *views; /* struct rb_gpu_view */
+    uint32_t first_view, first_layer, view_count;
+    const struct rb_gpu_image *targets[3]; /* depth: [0], R32F; rsm: position, normal, flux in
+                                            * rb_view_rsm_formats; arrays with layer views, in
+                                            * VK_IMAGE_LAYOUT_GENERAL */
+    const struct rb_gpu_image *depth;      /* depth, rsm: D32 scratch at least the targets' size,
+                                            * reused by every view of the batch */
+    const struct rb_view_list *list;       /* list: its heads have the layers */
+    float intensity[3]; /* rsm: radiant intensity in W/sr (perspective) or irradiance in W/m^2
+                         * across the beam (orthographic) of the light the view looks from */
+};
+
+struct rb_pass_view;
+/* Builds a pipeline for each variant of desc. Fails with RB_E_UNSUPPORTED for a pair this pass
+ * does not draw (a paraboloid view's rsm or list output), RB_E_VULKAN as Vulkan does. */
+enum rb_status rb_pass_view_create(struct rb_gpu *gpu, const struct rb_pass_view_desc *desc,
+                                   struct rb_pass_view **out, struct rb_err *err);
+/* Draws frame->indices over slot->vertices into each view of the batch: depth and rsm clear
+ * their target layers first; a list batch clears its layers' heads and resets the node pool,
+ * which its views then share. The batch's pair must be one the pass was created with. */
+void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const struct rb_frame *frame,
+                         const struct rb_frame_slot *slot, const struct rb_view_batch *batch);
+void rb_pass_view_destroy(struct rb_pass_view *p);
+
+/* A perspective view from eye along dir (up: the map's up), vertical field fov_y_rad, square
+ * texels for the given aspect, depths near..far. */
+void rb_view_perspective(struct rb_gpu_view *out, struct rb_vec3 eye, struct rb_vec3 dir,
+                         struct rb_vec3 up, float fov_y_rad, float aspect, float z_near,
+                         float z_far);
+/* An orthographic view whose near plane is centred on origin, looking along dir: half_width x
+ * half_height metres across (up: the map's up), depth_m deep. */
+void rb_view_orthographic(struct rb_gpu_view *out, struct rb_vec3 origin, struct rb_vec3 dir,
+                          struct rb_vec3 up, float half_width, float half_height, float depth_m);
+/* A paraboloid view of the hemisphere around axis, from eye, from RB_VIEW_PARABOLOID_NEAR z_far
+ * out to z_far: a direction d (unit, in the frame x = right, y = axis x right, z = axis) lands
+ * at NDC (d.x, d.y) / (1 + d.z). right must be perpendicular to axis; both are normalized here. */
+void rb_view_paraboloid(struct rb_gpu_view *out, struct rb_vec3 eye, struct rb_vec3 axis,
+                        struct rb_vec3 right, float z_far);
+
+/* Allocates the heads (cleared by each list batch) and the node pool. */
+enum rb_status rb_view_list_init(struct rb_gpu *gpu, const struct rb_view_list_desc *desc,
+                                 struct rb_view_list *out, struct rb_err *err);
+void rb_view_list_release(struct rb_gpu *gpu, struct rb_view_list *list);
+/* After the submit that recorded a list batch: its counters (requested, dropped). */
+struct rb_gpu_list_counter rb_view_list_usage(const struct rb_view_list *list);
+/* After that submit: RB_E_NOMEM, with the numbers and name in the message, when fragments found
+ * the pool full and were dropped; RB_OK otherwise. The caller decides whether that is fatal. */
+enum rb_status rb_view_list_check(const struct rb_view_list *list, const char *name,
+                                  struct rb_err *err);
+
+/* ---- shadow.c: the direct light's shadow maps, as raster views ------------------------------ */
+
 struct rb_pass_shadow;
 enum rb_status rb_pass_shadow_create(struct rb_gpu *gpu, struct rb_pass_shadow **out,
                                      struct rb_err *err);
+/* Renders frame->shadow_layer_count layers of frame->shadow_maps from frame->shadow_views. Reads
+ * the views' kinds from the host copy of frame->shadow_views, so it records after they are
+ * written for the frame. */
 void rb_pass_shadow_record(struct rb_pass_shadow *p, VkCommandBuffer cmd,
                            const struct rb_frame *frame, const struct rb_frame_slot *cur);
 void rb_pass_shadow_destroy(struct rb_pass_shadow *p);

@@ -1,48 +1,44 @@
-/* shadow: one render per shadow-map layer (six cube faces per point light, one map per spot or
- * directional light) of the distance to the light into an R32F array (DESIGN.md "shadow"). The
- * direct pass filters it by hand with 16-tap PCF. */
+/* shadow: the direct light's shadow maps (DESIGN.md "shadow"; seed 000, B.3: cube maps for
+ * point lights), six perspective layers per point light, one per spot light and an orthographic
+ * one per directional light, each the distance to the light (or along it) in an R32F array
+ * layer, drawn by the raster-view pass. The direct pass filters them by hand with 16-tap PCF.
+ * Which views there are, and their matrices, the frame decides (lib/integrators/frame.c). */
 #include "passes/passes.h"
 
+#include <stddef.h>
 #include <stdlib.h>
 
-#include "shadow.frag.h"
-#include "shadow.vert.h"
+/* A shadow view is a raster view as it is: the light's position is the view's origin. */
+_Static_assert(offsetof(struct rb_gpu_shadow_view, view_proj) ==
+                   offsetof(struct rb_gpu_view, transform),
+               "shadow view transform");
+_Static_assert(offsetof(struct rb_gpu_shadow_view, light) == offsetof(struct rb_gpu_view, origin),
+               "shadow view origin");
+_Static_assert(offsetof(struct rb_gpu_shadow_view, axis) == offsetof(struct rb_gpu_view, axis),
+               "shadow view axis");
+_Static_assert(sizeof(struct rb_gpu_shadow_view) == sizeof(struct rb_gpu_view), "shadow view");
 
 struct rb_pass_shadow {
-    struct rb_gpu *gpu;
-    struct rb_gpu_layout layout;
-    VkPipeline pipeline;
-};
-
-static const VkDescriptorType bindings[] = {
-    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+    struct rb_pass_view *view;
 };
 
 enum rb_status rb_pass_shadow_create(struct rb_gpu *gpu, struct rb_pass_shadow **out,
                                      struct rb_err *err)
 {
+    static const struct rb_view_variant variants[] = {
+        {RB_VIEW_KIND_PERSPECTIVE, RB_VIEW_OUTPUT_DEPTH},
+        {RB_VIEW_KIND_ORTHOGRAPHIC, RB_VIEW_OUTPUT_DEPTH},
+    };
     struct rb_pass_shadow *p = calloc(1, sizeof(*p));
     if (!p)
         return rb_errf(err, RB_E_NOMEM, "out of memory");
-    p->gpu = gpu;
-    VkFormat color = VK_FORMAT_R32_SFLOAT;
-    enum rb_status st = rb_gpu_layout_init(gpu, bindings, 2, sizeof(uint32_t), &p->layout, err);
-    if (st == RB_OK)
-        st = rb_gpu_graphics_pipeline(gpu,
-                                      &(struct rb_gpu_graphics_desc){
-                                          .vert = rb_spv_shadow_vert,
-                                          .vert_bytes = sizeof(rb_spv_shadow_vert),
-                                          .frag = rb_spv_shadow_frag,
-                                          .frag_bytes = sizeof(rb_spv_shadow_frag),
-                                          .layout = p->layout.pipeline_layout,
-                                          .color_formats = &color,
-                                          .color_count = 1,
-                                          .depth_format = VK_FORMAT_D32_SFLOAT,
-                                          .cull = VK_CULL_MODE_NONE,
-                                          .debug_name = "shadow",
-                                      },
-                                      &p->pipeline, err);
+    enum rb_status st = rb_pass_view_create(gpu,
+                                            &(struct rb_pass_view_desc){
+                                                .variants = variants,
+                                                .variant_count = 2,
+                                                .debug_name = "shadow",
+                                            },
+                                            &p->view, err);
     if (st) {
         rb_pass_shadow_destroy(p);
         return st;
@@ -51,55 +47,34 @@ enum rb_status rb_pass_shadow_create(struct rb_gpu *gpu, struct rb_pass_shadow *
     return RB_OK;
 }
 
+static enum rb_view_kind kind_of(const struct rb_gpu_shadow_view *v)
+{
+    return (uint32_t)v->light[3] == RB_KIND_DIRECTIONAL ? RB_VIEW_KIND_ORTHOGRAPHIC
+                                                        : RB_VIEW_KIND_PERSPECTIVE;
+}
+
 void rb_pass_shadow_record(struct rb_pass_shadow *p, VkCommandBuffer cmd,
                            const struct rb_frame *frame, const struct rb_frame_slot *cur)
 {
-    uint32_t size = frame->shadow_maps.width_px;
-    struct rb_gpu_bindings b = {0};
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &cur->vertices);
-    rb_gpu_bind_buffer(&b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &frame->shadow_views);
-    for (uint32_t layer = 0; layer < frame->shadow_layer_count; layer++) {
-        VkRenderingAttachmentInfo color = {
-            .sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
-            .imageView = frame->shadow_maps.layer_views[layer],
-            .imageLayout = VK_IMAGE_LAYOUT_GENERAL,
-            .loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
-            .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
-            .clearValue = {.color = {{3.0e38f, 0.0f, 0.0f, 0.0f}}}, /* nothing: far away */
-        };
-        VkRenderingAttachmentInfo depth = {
-            .sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
-            .imageView = frame->shadow_depth.view,
-            .imageLayout = VK_IMAGE_LAYOUT_GENERAL,
-            .loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
-            .storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE,
-            .clearValue = {.depthStencil = {1.0f, 0}},
-        };
-        VkRenderingInfo ri = {
-            .sType = VK_STRUCTURE_TYPE_RENDERING_INFO,
-            .renderArea = {{0, 0}, {size, size}},
-            .layerCount = 1,
-            .colorAttachmentCount = 1,
-            .pColorAttachments = &color,
-            .pDepthAttachment = &depth,
-        };
-        vkCmdBeginRendering(cmd, &ri);
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p->pipeline);
-        rb_gpu_push_bindings(p->gpu, cmd, VK_PIPELINE_BIND_POINT_GRAPHICS,
-                             p->layout.pipeline_layout, &b);
-        vkCmdPushConstants(cmd, p->layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0, sizeof(uint32_t),
-                           &layer);
-        VkViewport vp = {0, 0, (float)size, (float)size, 0.0f, 1.0f};
-        VkRect2D sc = {{0, 0}, {size, size}};
-        vkCmdSetViewport(cmd, 0, 1, &vp);
-        vkCmdSetScissor(cmd, 0, 1, &sc);
-        if (frame->index_count) {
-            vkCmdBindIndexBuffer(cmd, frame->indices.buffer, 0, VK_INDEX_TYPE_UINT32);
-            vkCmdDrawIndexed(cmd, frame->index_count, 1, 0, 0, 0);
-        }
-        vkCmdEndRendering(cmd);
-        /* The scratch depth image is reused by the next layer. */
-        rb_gpu_barrier(cmd);
+    /* Consecutive layers of one kind (a point light's six faces, lights of one type) go as one
+     * batch. */
+    const struct rb_gpu_shadow_view *views = frame->shadow_views.mapped;
+    uint32_t count = frame->shadow_layer_count;
+    for (uint32_t first = 0, end; first < count; first = end) {
+        enum rb_view_kind kind = kind_of(&views[first]);
+        for (end = first + 1; end < count && kind_of(&views[end]) == kind; end++)
+            ;
+        rb_pass_view_record(p->view, cmd, frame, cur,
+                            &(struct rb_view_batch){
+                                .kind = kind,
+                                .output = RB_VIEW_OUTPUT_DEPTH,
+                                .views = &frame->shadow_views,
+                                .first_view = first,
+                                .first_layer = first,
+                                .view_count = end - first,
+                                .targets = {&frame->shadow_maps},
+                                .depth = &frame->shadow_depth,
+                            });
     }
 }
 
@@ -107,8 +82,6 @@ void rb_pass_shadow_destroy(struct rb_pass_shadow *p)
 {
     if (!p)
         return;
-    if (p->pipeline)
-        vkDestroyPipeline(p->gpu->device, p->pipeline, NULL);
-    rb_gpu_layout_release(p->gpu, &p->layout);
+    rb_pass_view_destroy(p->view);
     free(p);
 }

@@ -1,0 +1,26 @@
+// view: world-space vertices (from animate) into one view of the raster-view pass. Perspective
+// and orthographic views project here; for paraboloid views gl_Position is the vertex in the
+// view's frame (its transform is affine), which view.tesc and view.tese project.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "view_shared.h"
+
+layout(std430, binding = RB_VIEW_BIND_VERTICES) readonly buffer Verts { rb_gpu_vertex verts[]; };
+layout(std430, binding = RB_VIEW_BIND_VIEWS) readonly buffer Views { rb_gpu_view views[]; };
+layout(push_constant) uniform Push { rb_gpu_view_push pc; };
+
+layout(location = 0) out vec3 o_pos;
+layout(location = 1) out vec3 o_normal;
+layout(location = 2) out vec2 o_uv;
+layout(location = 3) flat out uint o_material;
+
+void main()
+{
+    rb_gpu_vertex v = verts[gl_VertexIndex];
+    vec3 p = v.position.xyz;
+    o_pos = p;
+    o_normal = v.normal.xyz;
+    o_uv = v.uv.xy;
+    o_material = floatBitsToUint(v.uv.z);
+    gl_Position = views[pc.index.x].transform * vec4(p, 1.0);
+}
