@@ -150,6 +150,7 @@ static int first_hit(const struct scene *s, const double o[3], const double d[3]
 struct gpu_scene {
     struct rb_gpu *gpu;
     struct rb_frame frame;
+    struct rb_frame_slot slot; /* the frame's one slot */
 };
 
 static void check_ok(enum rb_status st, const struct rb_err *err)
@@ -205,6 +206,9 @@ static void upload(struct gpu_scene *g, const struct scene *s, float albedo)
     struct rb_gpu *gpu = g->gpu;
     struct rb_frame *f = &g->frame;
     memset(f, 0, sizeof(*f));
+    memset(&g->slot, 0, sizeof(g->slot));
+    f->slots = &g->slot;
+    f->slot_count = 1;
     uint32_t nv = 4 * (uint32_t)s->count, ni = 6 * (uint32_t)s->count;
     make_buffer(gpu, nv * sizeof(struct rb_gpu_vertex), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                 "vertices", &f->slots[0].vertices);
