@@ -67,7 +67,7 @@ DEPS := $(LIB_OBJ:.o=.d) $(CMD_OBJ:.o=.d) $(UNIT_BIN:=.d) $(TOOL_BIN:=.d) \
 
 DEPS_STAMP := $(BUILD)/.deps-ok
 
-.PHONY: all test check bench demo install uninstall clean lint format deps fuzz
+.PHONY: all test check bench demo install uninstall clean lint format deps fuzz update-golden
 .SECONDARY: $(SPV_H)
 all: $(BUILD)/raybundle
 
@@ -191,6 +191,10 @@ test check: $(BUILD)/raybundle $(BUILD)/mkdemo $(UNIT_BIN) $(TOOL_BIN) $(FUZZ_RE
 
 bench: $(BUILD)/raybundle
 	$(Q)BUILD=$(BUILD) tests/bench.sh
+
+# Golden frames for t0130: only for a change meant to change pixels (see tests/golden/update.sh).
+update-golden: $(BUILD)/raybundle $(TOOL_BIN)
+	$(Q)BUILD=$(BUILD) tests/golden/update.sh
 
 demo: $(BUILD)/raybundle
 	$(Q)$(BUILD)/raybundle render jobs/demo.yaml --preview
