@@ -11,7 +11,8 @@
 
 struct rb_gpu_desc {
     const char *device; /* name substring or index; NULL: lavapipe, else the first device */
-    bool validate;      /* enable VK_LAYER_KHRONOS_validation; any message fails the run */
+    bool validate;      /* enable VK_LAYER_KHRONOS_validation and its synchronization validation;
+                         * any message fails the run */
 };
 
 struct rb_gpu {
