@@ -395,7 +395,9 @@ static void expect_none(const VkDependencyInfo *dep)
 #define ACCESS(x) VK_ACCESS_2_##x##_BIT
 
 /* The direct integrator's shape: an attachment written by a raster pass and read by two compute
- * passes, a uniform buffer every pass reads, a buffer written and read back by the host. */
+ * passes, a uniform buffer every pass reads, a buffer written and read back by the host. The
+ * attachment cases are checked only here: the validation layer of Debian 12 (1.3.239) does not
+ * see the accesses of dynamic rendering, so its synchronization checks miss those hazards. */
 static void test_barrier_builder(void **state)
 {
     (void)state;
