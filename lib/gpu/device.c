@@ -115,7 +115,22 @@ static bool has_instance_extension(const char *name)
 static VkResult create_instance(bool validate, bool debug_utils, VkInstance *out)
 {
     const char *layers[] = {VALIDATION_LAYER};
-    const char *exts[] = {VK_EXT_DEBUG_UTILS_EXTENSION_NAME};
+    const char *exts[2];
+    uint32_t ext_count = 0;
+    if (debug_utils)
+        exts[ext_count++] = VK_EXT_DEBUG_UTILS_EXTENSION_NAME;
+    /* Validation checks synchronization too: a missing barrier between passes is a hazard the
+     * layer reports like any other error (the layer provides the extension itself). */
+    static const VkValidationFeatureEnableEXT enables[] = {
+        VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT,
+    };
+    VkValidationFeaturesEXT features = {
+        .sType = VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT,
+        .enabledValidationFeatureCount = sizeof(enables) / sizeof(enables[0]),
+        .pEnabledValidationFeatures = enables,
+    };
+    if (validate)
+        exts[ext_count++] = VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME;
     VkApplicationInfo app = {
         .sType = VK_STRUCTURE_TYPE_APPLICATION_INFO,
         .pApplicationName = "raybundle",
@@ -125,10 +140,11 @@ static VkResult create_instance(bool validate, bool debug_utils, VkInstance *out
     };
     VkInstanceCreateInfo ci = {
         .sType = VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO,
+        .pNext = validate ? &features : NULL,
         .pApplicationInfo = &app,
         .enabledLayerCount = validate ? 1 : 0,
         .ppEnabledLayerNames = layers,
-        .enabledExtensionCount = debug_utils ? 1 : 0,
+        .enabledExtensionCount = ext_count,
         .ppEnabledExtensionNames = exts,
     };
     return vkCreateInstance(&ci, NULL, out);

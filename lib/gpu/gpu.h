@@ -11,7 +11,8 @@
 
 struct rb_gpu_desc {
     const char *device; /* name substring or index; NULL: lavapipe, else the first device */
-    bool validate;      /* enable VK_LAYER_KHRONOS_validation; any message fails the run */
+    bool validate;      /* enable VK_LAYER_KHRONOS_validation and its synchronization validation;
+                         * any message fails the run */
 };
 
 struct rb_gpu {
@@ -172,6 +173,83 @@ void rb_gpu_image_barrier(struct rb_gpu *gpu, VkCommandBuffer cmd, struct rb_gpu
 /* A global memory barrier between everything before and everything after (simple and correct;
  * passes are few and large). */
 void rb_gpu_barrier(VkCommandBuffer cmd);
+
+/* ---- barriers between passes (barrier.c) --------------------------------------------------- */
+
+/* How a pass uses a resource: one row each in barrier.c's table, which gives its pipeline
+ * stages and access. Attachments are cleared on load (their load is a write, no blending);
+ * transfers are fills and copies; a host read happens after the frame's fence. */
+enum rb_gpu_use {
+    RB_GPU_USE_INVALID = 0,
+    RB_GPU_COMPUTE_UNIFORM,    /* uniform buffer, compute shader */
+    RB_GPU_COMPUTE_READ,       /* storage buffer or image, read by a compute shader */
+    RB_GPU_COMPUTE_WRITE,      /* storage buffer or image, written by a compute shader */
+    RB_GPU_COMPUTE_READ_WRITE, /* storage, read and written (atomics, accumulation) */
+    RB_GPU_COMPUTE_SAMPLED,    /* sampled image, compute shader */
+    RB_GPU_GRAPHICS_UNIFORM,   /* uniform buffer, vertex and fragment shaders */
+    RB_GPU_VERTEX_READ,        /* storage buffer, read by a vertex shader */
+    RB_GPU_GRAPHICS_READ,      /* storage buffer, read by vertex and fragment shaders */
+    RB_GPU_FRAGMENT_READ,      /* storage buffer, read by a fragment shader */
+    RB_GPU_FRAGMENT_SAMPLED,   /* sampled image, fragment shader */
+    RB_GPU_INDEX_READ,         /* index buffer */
+    RB_GPU_COLOR_ATTACHMENT,   /* cleared and drawn into */
+    RB_GPU_DEPTH_ATTACHMENT,   /* cleared, tested and written */
+    RB_GPU_TRANSFER_READ,      /* source of a copy */
+    RB_GPU_TRANSFER_WRITE,     /* filled, or the destination of a copy */
+    RB_GPU_HOST_READ,          /* read by the host after the frame's fence */
+    RB_GPU_USE_COUNT
+};
+
+/* One resource a pass reads or writes: a buffer or an image (exactly one of them), whole. */
+struct rb_gpu_access {
+    const struct rb_gpu_buffer *buffer;
+    const struct rb_gpu_image *image;
+    enum rb_gpu_use use;
+    VkImageLayout layout; /* images: the layout the pass uses; 0: VK_IMAGE_LAYOUT_GENERAL */
+};
+
+/* What the queue has done to each resource since the barriers that cover it: the last write
+ * and the stages that read it since, what that write was made visible to, and the image's
+ * layout. Declared uses of a pass go in, the barriers the pass needs after everything recorded
+ * before it come out: read after write, write after read, write after write, and layout
+ * changes, one buffer or image barrier per resource (so an undeclared resource stays unsynced,
+ * and synchronization validation says so); two reads need none. The state carries over from
+ * one command buffer to the next on the same queue (barriers order later submissions too).
+ * A resource first seen is in VK_IMAGE_LAYOUT_GENERAL with nothing pending (the frame's
+ * resources after rb_frame_init's barrier and wait). Resources are told apart by handle.
+ * Caller storage: start from RB_GPU_BARRIERS_INIT, end with rb_gpu_barriers_release. Not
+ * thread-safe; one per queue of passes. */
+struct rb_gpu_barriers {
+    struct rb_gpu_tracked *tracked; /* one per resource seen */
+    uint32_t tracked_count, tracked_cap;
+    uint32_t *touched; /* scratch: the tracked resources of the pass being derived */
+    VkBufferMemoryBarrier2 *buffer_barriers;
+    VkImageMemoryBarrier2 *image_barriers;
+    uint32_t scratch_cap;  /* of touched, buffer_barriers and image_barriers */
+    enum rb_status status; /* a derivation that failed in rb_gpu_barriers_record */
+};
+#define RB_GPU_BARRIERS_INIT                                                                       \
+    {                                                                                              \
+        0                                                                                          \
+    }
+
+/* Derives the barriers that uses (use_count of them, one pass's; a resource may appear more
+ * than once, its uses are joined) need after everything b has seen, into *out (its arrays are
+ * b's, valid until the next call; no barriers: both counts 0), and notes the uses in b. Pure:
+ * records nothing, needs no device. RB_E_NOMEM when b cannot grow, before b changes. A use
+ * with no resource or two, an unknown use, or two layouts for one image in one pass is a bug
+ * (RB_BUG). */
+enum rb_status rb_gpu_barriers_derive(struct rb_gpu_barriers *b, const struct rb_gpu_access *uses,
+                                      uint32_t use_count, VkDependencyInfo *out,
+                                      struct rb_err *err);
+/* rb_gpu_barriers_derive into cmd (nothing when no barrier is needed). It cannot fail: when
+ * the derivation does, a full barrier is recorded instead and the failure kept in b->status,
+ * for the caller to report after the submit (rb_gpu_barriers_check). */
+void rb_gpu_barriers_record(struct rb_gpu_barriers *b, VkCommandBuffer cmd,
+                            const struct rb_gpu_access *uses, uint32_t use_count);
+/* The failure rb_gpu_barriers_record kept, if any (then cleared), as a message naming it. */
+enum rb_status rb_gpu_barriers_check(struct rb_gpu_barriers *b, struct rb_err *err);
+void rb_gpu_barriers_release(struct rb_gpu_barriers *b);
 
 /* ---- commands ------------------------------------------------------------------------------ */
 

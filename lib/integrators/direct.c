@@ -57,26 +57,93 @@ static enum rb_status create(struct rb_integrator *it, void **state, struct rb_e
     return RB_OK;
 }
 
+/* Each pass's declaration lists every frame resource its record function binds, draws with
+ * or copies, with how (the shaders' stages and readonly/writeonly qualifiers); the driver
+ * derives the barriers between the passes from them. The output pass's non-finite counter is
+ * its own: it zeroes it, orders that before its shader and makes it visible to the host. */
 static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
                    const struct rb_frame_ctx *ctx)
 {
     struct direct *d = state;
     struct rb_frame *frame = &it->frame;
-    rb_integrator_pass_begin(it, cmd, "animate");
-    rb_pass_animate_record(d->animate, cmd, frame, ctx->cur);
+    const struct rb_frame_slot *cur = ctx->cur, *prev = ctx->prev;
+    const struct rb_gpu_image *gb = frame->gbuffer;
+
+    const struct rb_gpu_access animate[] = {
+        {.buffer = &frame->src_vertices, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &frame->morph_deltas, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &cur->instances, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &cur->joints, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &cur->weights, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &cur->vertices, .use = RB_GPU_COMPUTE_WRITE},
+    };
+    rb_integrator_pass_begin(it, cmd, "animate", animate, COUNT(animate));
+    rb_pass_animate_record(d->animate, cmd, frame, cur);
     rb_integrator_pass_end(it, cmd);
     if (ctx->is_warmup)
         return; /* a later frame reads this frame's world vertices, nothing else */
-    rb_integrator_pass_begin(it, cmd, "gbuffer");
-    rb_pass_gbuffer_record(d->gbuffer, cmd, frame, ctx->cur, ctx->prev);
+
+    const struct rb_gpu_access gbuffer[] = {
+        {.buffer = &frame->globals, .use = RB_GPU_GRAPHICS_UNIFORM},
+        {.buffer = &cur->vertices, .use = RB_GPU_VERTEX_READ},
+        {.buffer = &prev->vertices, .use = RB_GPU_VERTEX_READ},
+        {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
+        {.buffer = &frame->materials, .use = RB_GPU_FRAGMENT_READ},
+        {.image = &frame->srgb_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
+        {.image = &frame->linear_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
+        {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &gb[RB_GB_NORMAL], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &gb[RB_GB_ALBEDO], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &gb[RB_GB_SPECULAR], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &gb[RB_GB_EMISSION], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &gb[RB_GB_MOTION], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &frame->depth, .use = RB_GPU_DEPTH_ATTACHMENT},
+    };
+    _Static_assert(RB_GBUFFER_COLOR_COUNT == 6, "every G-buffer attachment is declared");
+    rb_integrator_pass_begin(it, cmd, "gbuffer", gbuffer, COUNT(gbuffer));
+    rb_pass_gbuffer_record(d->gbuffer, cmd, frame, cur, prev);
     rb_integrator_pass_end(it, cmd);
-    rb_integrator_pass_begin(it, cmd, "shadow");
-    rb_pass_shadow_record(d->shadow, cmd, frame, ctx->cur);
+
+    const struct rb_gpu_access shadow[] = {
+        {.buffer = &cur->vertices, .use = RB_GPU_VERTEX_READ},
+        {.buffer = &frame->shadow_views, .use = RB_GPU_GRAPHICS_READ},
+        {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
+        {.image = &frame->shadow_maps, .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &frame->shadow_depth, .use = RB_GPU_DEPTH_ATTACHMENT},
+    };
+    rb_integrator_pass_begin(it, cmd, "shadow", shadow, COUNT(shadow));
+    rb_pass_shadow_record(d->shadow, cmd, frame, cur);
     rb_integrator_pass_end(it, cmd);
-    rb_integrator_pass_begin(it, cmd, "direct");
+
+    const struct rb_gpu_access direct[] = {
+        {.buffer = &frame->globals, .use = RB_GPU_COMPUTE_UNIFORM},
+        {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_NORMAL], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_ALBEDO], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_SPECULAR], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_EMISSION], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_MOTION], .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &frame->lights, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &frame->shadow_views, .use = RB_GPU_COMPUTE_READ},
+        {.image = &frame->shadow_maps, .use = RB_GPU_COMPUTE_SAMPLED},
+        {.image = &frame->env_map, .use = RB_GPU_COMPUTE_SAMPLED},
+        {.image = &frame->direct, .use = RB_GPU_COMPUTE_WRITE},
+    };
+    rb_integrator_pass_begin(it, cmd, "direct", direct, COUNT(direct));
     rb_pass_direct_record(d->direct, cmd, frame);
     rb_integrator_pass_end(it, cmd);
-    rb_integrator_pass_begin(it, cmd, "output");
+
+    const struct rb_gpu_access output[] = {
+        {.buffer = &frame->globals, .use = RB_GPU_COMPUTE_UNIFORM},
+        {.image = frame->beauty, .use = RB_GPU_COMPUTE_READ},
+        {.image = &frame->direct, .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_ALBEDO], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_NORMAL], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_MOTION], .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &frame->readback, .use = RB_GPU_COMPUTE_WRITE},
+    };
+    rb_integrator_pass_begin(it, cmd, "output", output, COUNT(output));
     rb_pass_output_record(d->output, cmd, frame);
     rb_integrator_pass_end(it, cmd);
 }

@@ -2,9 +2,10 @@
  * animation clips and the first moment, builds the frame resources (frame.c) with one slot per
  * frame of history plus one, and lets the integrator (its ops table) add its own. Each frame it
  * evaluates the moment and the one before it, writes the frame's slot and globals, records the
- * integrator's passes (timed, a full barrier after each), submits, waits, and groups the pass
- * timings by name. A frame whose predecessor was not the last rendered is preceded by warm-up
- * frames (the history contract in integrators.h). */
+ * integrator's passes (timed, each preceded by the barriers derived from what it and the
+ * passes before it declared: lib/gpu/barrier.c), makes the readback visible to the host,
+ * submits, waits, and groups the pass timings by name. A frame whose predecessor was not the
+ * last rendered is preceded by warm-up frames (the history contract in integrators.h). */
 #include "integrators/integrators_int.h"
 
 #include <stdlib.h>
@@ -89,14 +90,16 @@ uint32_t rb_integrator_history_frames(const struct rb_integrator *it)
     return it->history_frames;
 }
 
-void rb_integrator_pass_begin(struct rb_integrator *it, VkCommandBuffer cmd, const char *name)
+void rb_integrator_pass_begin(struct rb_integrator *it, VkCommandBuffer cmd, const char *name,
+                              const struct rb_gpu_access *uses, uint32_t use_count)
 {
+    /* Inside the timed pass: the time a pass waits for the ones before it is its own. */
     rb_gpu_pass_begin(it->gpu, cmd, name);
+    rb_gpu_barriers_record(&it->barriers, cmd, uses, use_count);
 }
 
 void rb_integrator_pass_end(struct rb_integrator *it, VkCommandBuffer cmd)
 {
-    rb_gpu_barrier(cmd);
     rb_gpu_pass_end(it->gpu, cmd);
 }
 
@@ -166,7 +169,11 @@ static enum rb_status render_one(struct rb_integrator *it, int frame_index, bool
     if ((st = rb_gpu_begin(gpu, err)))
         return st;
     it->ops->record(it, it->state, gpu->cmd, &ctx);
-    if ((st = rb_gpu_submit_wait(gpu, err)))
+    if (!is_warmup) /* the caller reads the pixels once the fence has signalled */
+        rb_gpu_barriers_record(
+            &it->barriers, gpu->cmd,
+            &(struct rb_gpu_access){.buffer = &frame->readback, .use = RB_GPU_HOST_READ}, 1);
+    if ((st = rb_gpu_submit_wait(gpu, err)) || (st = rb_gpu_barriers_check(&it->barriers, err)))
         return st;
     it->has_last = true;
     it->last_frame = frame_index;
@@ -213,6 +220,7 @@ void rb_integrator_destroy(struct rb_integrator *it)
         vkDeviceWaitIdle(it->gpu->device);
     if (it->ops && it->state)
         it->ops->destroy(it, it->state);
+    rb_gpu_barriers_release(&it->barriers);
     rb_frame_release(it->gpu, &it->frame);
     rb_scene_pose_destroy(it->prev.pose);
     rb_scene_pose_destroy(it->cur.pose);

@@ -6,6 +6,8 @@
 #include "integrators/integrators.h"
 #include "passes/passes.h"
 
+#define COUNT(a) (sizeof(a) / sizeof((a)[0]))
+
 /* Everything the CPU knows about one time: the pose, the camera, the lights. */
 struct rb_moment {
     const struct rb_scene_setup *setup; /* the job's, borrowed from the integrator */
@@ -31,7 +33,8 @@ struct rb_integrator_ops {
     uint32_t (*history_frames)(const struct rb_job *job);
     /* Creates the integrator's own passes and resources once the driver's frame exists. */
     enum rb_status (*create)(struct rb_integrator *it, void **state, struct rb_err *err);
-    /* Records the frame: each pass between rb_integrator_pass_begin and _end. Cannot fail. */
+    /* Records the frame: each pass between rb_integrator_pass_begin, which declares every
+     * resource the pass reads and writes, and rb_integrator_pass_end. Cannot fail. */
     void (*record)(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
                    const struct rb_frame_ctx *ctx);
     /* After the submit: what record's passes counted (e.g. non-finite output values). */
@@ -65,10 +68,19 @@ struct rb_integrator {
     int last_frame;              /* the last frame rendered (warm-up or not) */
     struct rb_pass_time *groups; /* the last frame's passes, grouped by name */
     uint32_t group_count, group_cap;
+    struct rb_gpu_barriers barriers; /* what the passes did, from one frame to the next */
 };
 
-/* Opens and closes one timed pass of the frame; the driver puts a full barrier after each. */
-void rb_integrator_pass_begin(struct rb_integrator *it, VkCommandBuffer cmd, const char *name);
+/* Opens one timed pass of the frame and records the barriers it needs after the passes before
+ * it, this frame's and earlier frames': uses (use_count of them) are every frame resource and
+ * every resource of the integrator's own that the pass reads or writes, with how (struct
+ * rb_gpu_access: read after write, write after read and write after write get a barrier, two
+ * reads none). A resource the pass touches and does not declare is not synchronized (tests
+ * run with synchronization validation, which reports it). Commands a pass records inside
+ * itself (a fill and the barrier to the shader that adds to it) are the pass's own business. */
+void rb_integrator_pass_begin(struct rb_integrator *it, VkCommandBuffer cmd, const char *name,
+                              const struct rb_gpu_access *uses, uint32_t use_count);
+/* Closes the pass opened last. */
 void rb_integrator_pass_end(struct rb_integrator *it, VkCommandBuffer cmd);
 
 /* Creates every shared resource for the scene at the job's resolution: geometry, materials,

@@ -1,7 +1,9 @@
 /* The frame driver (lib/integrators/driver.c) with integrators of the test's own: the history
  * contract (a chunk equals the same frames of a whole run, warm-up frames included, for history
- * 1 and 3), pass groups (200 recordings of one pass are one timing entry with count 200), and
- * the direct integrator's chunk identity. On lavapipe, validation on. */
+ * 1 and 3), pass groups (200 recordings of one pass are one timing entry with count 200), the
+ * direct integrator's chunk identity, and the barriers derived from the passes' declarations
+ * (a declaration left out is a hazard that synchronization validation reports). On lavapipe,
+ * validation and synchronization validation on. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -68,17 +70,22 @@ static void record_tags(struct rb_integrator *it, void *state, VkCommandBuffer c
     struct tags *t = state;
     uint32_t n = it->frame.slot_count;
     uint32_t slot = (uint32_t)(((int64_t)ctx->frame % n + n) % n);
-    rb_integrator_pass_begin(it, cmd, "stamp");
+    const struct rb_gpu_access fill[] = {{.buffer = &t->buffer, .use = RB_GPU_TRANSFER_WRITE}};
+    const struct rb_gpu_access copy[] = {
+        {.buffer = &t->buffer, .use = RB_GPU_TRANSFER_READ},
+        {.buffer = &it->frame.readback, .use = RB_GPU_TRANSFER_WRITE},
+    };
+    rb_integrator_pass_begin(it, cmd, "stamp", fill, COUNT(fill));
     vkCmdFillBuffer(cmd, t->buffer.buffer, 4 * slot, 4, (uint32_t)ctx->frame);
     rb_integrator_pass_end(it, cmd);
     for (uint32_t i = 0; i < t->repeat; i++) {
-        rb_integrator_pass_begin(it, cmd, "repeat");
+        rb_integrator_pass_begin(it, cmd, "repeat", fill, COUNT(fill));
         vkCmdFillBuffer(cmd, t->buffer.buffer, 4 * (SLOTS_MAX - 1), 4, i);
         rb_integrator_pass_end(it, cmd);
     }
     if (ctx->is_warmup)
         return;
-    rb_integrator_pass_begin(it, cmd, "copy");
+    rb_integrator_pass_begin(it, cmd, "copy", copy, COUNT(copy));
     vkCmdCopyBuffer(cmd, t->buffer.buffer, it->frame.readback.buffer, 1,
                     &(VkBufferCopy){0, 0, 4 * n});
     rb_integrator_pass_end(it, cmd);
@@ -97,6 +104,91 @@ static const struct rb_integrator_ops tags_ops = {
     .create = create_tags,
     .record = record_tags,
     .destroy = destroy_tags,
+};
+
+/* A test integrator whose passes hand a value on through two buffers of its own, each hazard
+ * kind once: "fill" writes the frame number into a, "copy" copies a to b (read after write on
+ * a), "refill" overwrites a (write after read), "out" copies b to the readback (read after
+ * write on b). The readback holds the frame number, not the refilled value, when the barriers
+ * order the passes. relay_drop names one declaration to leave out. */
+enum relay_drop { DROP_NONE, DROP_COPY_READ_A, DROP_COPY_WRITE_B, DROP_REFILL_A, DROP_OUT_READ_B };
+static enum relay_drop relay_drop;
+
+struct relay {
+    struct rb_gpu_buffer a, b; /* 16 bytes each */
+};
+
+static enum rb_status create_relay(struct rb_integrator *it, void **state, struct rb_err *err)
+{
+    struct relay *r = calloc(1, sizeof(*r));
+    if (!r)
+        return rb_errf(err, RB_E_NOMEM, "out of memory");
+    VkBufferUsageFlags usage = VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    enum rb_status st = rb_gpu_buffer_init(
+        it->gpu, &(struct rb_gpu_buffer_desc){.size_bytes = 16, .usage = usage, .debug_name = "a"},
+        &r->a, err);
+    if (st == RB_OK)
+        st = rb_gpu_buffer_init(
+            it->gpu,
+            &(struct rb_gpu_buffer_desc){.size_bytes = 16, .usage = usage, .debug_name = "b"},
+            &r->b, err);
+    if (st) {
+        rb_gpu_buffer_release(it->gpu, &r->b);
+        rb_gpu_buffer_release(it->gpu, &r->a);
+        free(r);
+        return st;
+    }
+    *state = r;
+    return RB_OK;
+}
+
+static void record_relay(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
+                         const struct rb_frame_ctx *ctx)
+{
+    struct relay *r = state;
+    if (ctx->is_warmup)
+        return;
+    const struct rb_gpu_access fill[] = {{.buffer = &r->a, .use = RB_GPU_TRANSFER_WRITE}};
+    const struct rb_gpu_access copy[] = {
+        {.buffer = &r->a, .use = RB_GPU_TRANSFER_READ},
+        {.buffer = &r->b, .use = RB_GPU_TRANSFER_WRITE},
+    };
+    const struct rb_gpu_access out[] = {
+        {.buffer = &r->b, .use = RB_GPU_TRANSFER_READ},
+        {.buffer = &it->frame.readback, .use = RB_GPU_TRANSFER_WRITE},
+    };
+    rb_integrator_pass_begin(it, cmd, "fill", fill, COUNT(fill));
+    vkCmdFillBuffer(cmd, r->a.buffer, 0, VK_WHOLE_SIZE, (uint32_t)ctx->frame);
+    rb_integrator_pass_end(it, cmd);
+    /* A dropped declaration is left out of the list (the last of copy's, the first of out's). */
+    rb_integrator_pass_begin(
+        it, cmd, "copy", relay_drop == DROP_COPY_READ_A ? copy + 1 : copy,
+        relay_drop == DROP_COPY_READ_A || relay_drop == DROP_COPY_WRITE_B ? 1 : COUNT(copy));
+    vkCmdCopyBuffer(cmd, r->a.buffer, r->b.buffer, 1, &(VkBufferCopy){0, 0, 16});
+    rb_integrator_pass_end(it, cmd);
+    rb_integrator_pass_begin(it, cmd, "refill", fill, relay_drop == DROP_REFILL_A ? 0 : 1);
+    vkCmdFillBuffer(cmd, r->a.buffer, 0, VK_WHOLE_SIZE, 0xdeadbeefu);
+    rb_integrator_pass_end(it, cmd);
+    rb_integrator_pass_begin(it, cmd, "out", relay_drop == DROP_OUT_READ_B ? out + 1 : out,
+                             relay_drop == DROP_OUT_READ_B ? 1 : COUNT(out));
+    vkCmdCopyBuffer(cmd, r->b.buffer, it->frame.readback.buffer, 1, &(VkBufferCopy){0, 0, 16});
+    rb_integrator_pass_end(it, cmd);
+}
+
+static void destroy_relay(struct rb_integrator *it, void *state)
+{
+    struct relay *r = state;
+    rb_gpu_buffer_release(it->gpu, &r->b);
+    rb_gpu_buffer_release(it->gpu, &r->a);
+    free(r);
+}
+
+static const struct rb_integrator_ops relay_ops = {
+    .name = "relay",
+    .history_frames = history_tags,
+    .create = create_relay,
+    .record = record_relay,
+    .destroy = destroy_relay,
 };
 
 struct fixture {
@@ -237,12 +329,66 @@ static void test_direct_chunks(void **state)
     free(chunk);
 }
 
+static void quiet(enum rb_log_level level, const char *msg, void *user)
+{
+    (void)level;
+    (void)msg;
+    (void)user;
+}
+
+/* With every declaration the relay's frames are validation-clean and hand the frame number on;
+ * each declaration left out is the hazard synchronization validation names, so the driver's
+ * barriers come from the declarations and nothing else orders the passes. */
+static void test_declared_barriers(void **state)
+{
+    struct fixture *f = *state;
+    static const struct {
+        enum relay_drop drop;
+        const char *hazard;
+    } cases[] = {
+        {DROP_COPY_READ_A, "SYNC-HAZARD-READ-AFTER-WRITE"},
+        {DROP_COPY_WRITE_B, "SYNC-HAZARD-READ-AFTER-WRITE"},
+        {DROP_REFILL_A, "SYNC-HAZARD-WRITE-AFTER-READ"},
+        {DROP_OUT_READ_B, "SYNC-HAZARD-READ-AFTER-WRITE"},
+    };
+    tags_history = 1;
+    relay_drop = DROP_NONE;
+    struct rb_integrator *it = make(f, &relay_ops, 0);
+    struct rb_frame_result r;
+    struct rb_err err = RB_ERR_INIT;
+    for (int frame = 0; frame < 3; frame++) {
+        if (rb_integrator_render(it, frame, &r, &err))
+            fail_msg("frame %d: %s", frame, err.msg);
+        uint32_t px[4];
+        memcpy(px, r.pixels, sizeof(px));
+        for (int i = 0; i < 4; i++)
+            assert_int_equal(px[i], frame);
+    }
+    assert_int_equal(r.pass_count, 4);
+    rb_integrator_destroy(it);
+    for (size_t c = 0; c < sizeof(cases) / sizeof(cases[0]); c++) {
+        relay_drop = cases[c].drop;
+        it = make(f, &relay_ops, 0);
+        rb_log_set_sink(quiet, NULL);
+        enum rb_status st = rb_integrator_render(it, 0, &r, &err);
+        rb_log_set_sink(NULL, NULL);
+        rb_integrator_destroy(it);
+        f->gpu->validation_messages = 0; /* the fixture's device goes on to other tests */
+        if (st != RB_E_VULKAN)
+            fail_msg("case %zu: rendered (%d) without the declaration", c, (int)st);
+        if (!strstr(err.msg, cases[c].hazard))
+            fail_msg("case %zu: wanted %s, got: %s", c, cases[c].hazard, err.msg);
+    }
+    relay_drop = DROP_NONE;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_history_contract),
         cmocka_unit_test(test_pass_groups),
         cmocka_unit_test(test_direct_chunks),
+        cmocka_unit_test(test_declared_barriers),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
