@@ -1,6 +1,6 @@
-// output: packs the frame's layers into one buffer for a single readback, in the order
-// RB_OUT_* gives (beauty RGBA, direct, indirect, albedo, normal, depth, motion). The direct
-// integrator has no indirect light: zero. Every value written that is NaN or infinite is
+// output: packs the frame's layers into one buffer for a single readback: the beauty (RGBA),
+// then the layers the job writes, in the order direct, indirect, albedo, normal, depth, motion
+// (with all of them, the RB_OUT_* layout). The direct integrator has no indirect light: zero. Every value written that is NaN or infinite is
 // counted in `nonfinite` (an integer atomic add, so the count does not depend on the order).
 #version 460
 #extension GL_GOOGLE_include_directive : require
@@ -21,10 +21,14 @@ layout(std430, binding = RB_BIND_OUTPUT_NONFINITE) buffer Nonfinite { uint nonfi
 
 // The band of rows this dispatch writes: Out is bound from the band's first row, so indices
 // into it count from there (lib/passes/output.c splits frames larger than one binding may be).
+// A pixel holds the beauty, then the job's layers in RB_LAYER order (rb_layer_offset in
+// lib/core/layers.c): only what the EXR will hold is written and read back.
 layout(push_constant) uniform Band
 {
     uint first_row;
     uint row_count;
+    uint layer_mask;
+    uint floats_per_pixel;
 } band;
 
 uint bad = 0u;
@@ -35,6 +39,16 @@ void put(uint i, float x)
 {
     o[i] = x;
     bad += (floatBitsToUint(x) & 0x7f800000u) == 0x7f800000u ? 1u : 0u;
+}
+
+// Writes the n components of v as layer `layer` when the job asks for it; advances at.
+void layer(uint layer, vec3 v, uint n, inout uint at)
+{
+    if ((band.layer_mask & (1u << layer)) == 0u)
+        return;
+    for (uint c = 0u; c < n; c++)
+        put(at + c, v[c]);
+    at += n;
 }
 
 void main()
@@ -51,27 +65,20 @@ void main()
     vec3 a = hit ? imageLoad(gb_albedo, ip).rgb : vec3(0.0);
     vec3 n = hit ? imageLoad(gb_normal, ip).xyz : vec3(0.0);
     vec2 m = hit ? imageLoad(gb_motion, ip).xy : vec2(0.0);
-    uint base = (row * g.size.x + px.x) * RB_OUT_FLOATS;
-    put(base + RB_OUT_BEAUTY + 0, b.r);
-    put(base + RB_OUT_BEAUTY + 1, b.g);
-    put(base + RB_OUT_BEAUTY + 2, b.b);
-    put(base + RB_OUT_BEAUTY + 3, hit ? 1.0 : 0.0);
-    put(base + RB_OUT_DIRECT + 0, d.r);
-    put(base + RB_OUT_DIRECT + 1, d.g);
-    put(base + RB_OUT_DIRECT + 2, d.b);
-    put(base + RB_OUT_INDIRECT + 0, 0.0);
-    put(base + RB_OUT_INDIRECT + 1, 0.0);
-    put(base + RB_OUT_INDIRECT + 2, 0.0);
-    put(base + RB_OUT_ALBEDO + 0, a.r);
-    put(base + RB_OUT_ALBEDO + 1, a.g);
-    put(base + RB_OUT_ALBEDO + 2, a.b);
-    put(base + RB_OUT_NORMAL + 0, n.x);
-    put(base + RB_OUT_NORMAL + 1, n.y);
-    put(base + RB_OUT_NORMAL + 2, n.z);
-    put(base + RB_OUT_DEPTH, hit ? pos.w : 0.0);
-    put(base + RB_OUT_MOTION + 0, m.x);
-    put(base + RB_OUT_MOTION + 1, m.y);
-    put(base + RB_OUT_FLOATS - 1, 0.0);
+    uint base = (row * g.size.x + px.x) * band.floats_per_pixel;
+    put(base + 0u, b.r);
+    put(base + 1u, b.g);
+    put(base + 2u, b.b);
+    put(base + 3u, hit ? 1.0 : 0.0);
+    uint at = base + 4u;
+    layer(RB_LAYER_DIRECT, d, 3u, at);
+    layer(RB_LAYER_INDIRECT, vec3(0.0), 3u, at); // the direct integrator has none
+    layer(RB_LAYER_ALBEDO, a, 3u, at);
+    layer(RB_LAYER_NORMAL, n, 3u, at);
+    layer(RB_LAYER_DEPTH, vec3(hit ? pos.w : 0.0, 0.0, 0.0), 1u, at);
+    layer(RB_LAYER_MOTION, vec3(m, 0.0), 2u, at);
+    for (; at < base + band.floats_per_pixel; at++)
+        put(at, 0.0); // padding to 16 bytes a pixel
     if (bad > 0u)
         atomicAdd(nonfinite, bad);
 }

@@ -203,6 +203,26 @@ static inline float rb_clampf(float x, float lo, float hi)
 }
 #endif
 
+/* The named layers of a frame, in the order they are packed and written after the beauty (RGBA,
+ * always first): a layer mask has bit l for layer l. */
+enum rb_layer {
+    RB_LAYER_DIRECT = 0, /* RGB */
+    RB_LAYER_INDIRECT,   /* RGB */
+    RB_LAYER_ALBEDO,     /* RGB */
+    RB_LAYER_NORMAL,     /* XYZ */
+    RB_LAYER_DEPTH,      /* Z */
+    RB_LAYER_MOTION,     /* XY */
+    RB_LAYER_COUNT,
+};
+#define RB_LAYERS_ALL ((1u << RB_LAYER_COUNT) - 1u)
+/* The packed pixel of a layer mask: the beauty's 4 floats, then each layer in the mask, in
+ * order, the whole rounded up to a multiple of 4 floats (16 bytes). With every layer this is
+ * the RB_OUT_* layout of shaders/common/shared.h (20 floats). */
+uint32_t rb_layer_width(enum rb_layer layer);
+uint32_t rb_layer_offset(uint32_t mask, enum rb_layer layer); /* in floats; for a layer in mask */
+uint32_t rb_layer_stride(uint32_t mask);                      /* floats per pixel */
+const char *rb_layer_name(enum rb_layer layer);               /* "direct", ... */
+
 /* What one frame produced, whichever renderer made it (a GPU integrator or the CPU reference);
  * the library writes it out (EXR layers, sidecars). Pointers are owned by the renderer and valid
  * until its next render or destroy. */
@@ -210,8 +230,10 @@ struct rb_frame_result {
     int frame;
     double time_s;
     uint32_t width_px, height_px;
-    const float *pixels; /* RB_OUT_FLOATS floats per pixel in the RB_OUT_* order of
-                          * shaders/common/shared.h, rows top to bottom */
+    const float *pixels;       /* floats_per_pixel floats a pixel, rows top to bottom: the
+                                * beauty, then the layers of layer_mask (rb_layer_offset) */
+    uint32_t floats_per_pixel; /* rb_layer_stride(layer_mask) */
+    uint32_t layer_mask;       /* the layers in pixels: the job's (GPU) or all (reference) */
     const struct rb_pass_time *passes;
     uint32_t pass_count;
     struct rb_mat4 world_to_camera, world_to_ndc; /* column-major; NDC as Vulkan: y down, z 0..1 */

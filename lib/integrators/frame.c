@@ -360,9 +360,9 @@ static enum rb_status upload_env(struct rb_gpu *gpu, const struct rb_integrator_
  * direct.comp (8 x 8 pixels) and animate.comp (64 vertices of one instance). */
 static enum rb_status check_limits(const struct rb_gpu *gpu, const struct rb_scene *scene,
                                    const struct rb_scene_pose *pose, uint32_t w, uint32_t h,
-                                   struct rb_err *err)
+                                   uint32_t floats_per_pixel, struct rb_err *err)
 {
-    VkDeviceSize row_bytes = (VkDeviceSize)w * RB_OUT_FLOATS * sizeof(float);
+    VkDeviceSize row_bytes = (VkDeviceSize)w * floats_per_pixel * sizeof(float);
     enum rb_status st = rb_gpu_check_buffer_size(gpu, "output", "readback", row_bytes * h, err);
     if (st == RB_OK)
         st = rb_gpu_check_storage_bands(gpu, "output", "readback", row_bytes, h, err);
@@ -418,12 +418,14 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
     memset(frame, 0, sizeof(*frame));
     frame->width_px = w;
     frame->height_px = h;
+    frame->layer_mask = job->layer_mask;
+    frame->readback_floats = rb_layer_stride(job->layer_mask);
     frame->slots = calloc(slot_count, sizeof(*frame->slots));
     if (!frame->slots)
         return rb_errf(err, RB_E_NOMEM, "out of memory for %u frame slots", slot_count);
     frame->slot_count = slot_count;
 
-    enum rb_status st = check_limits(gpu, scene, first->pose, w, h, err);
+    enum rb_status st = check_limits(gpu, scene, first->pose, w, h, frame->readback_floats, err);
     if (st == RB_OK)
         st = make_buffer(gpu, sizeof(struct rb_gpu_globals), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
                          true, "globals", &frame->globals, err);
@@ -486,7 +488,7 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
                         VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, false, "direct",
                         &frame->direct, err);
     if (st == RB_OK)
-        st = make_buffer(gpu, (VkDeviceSize)w * h * RB_OUT_FLOATS * sizeof(float),
+        st = make_buffer(gpu, (VkDeviceSize)w * h * frame->readback_floats * sizeof(float),
                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                          true, "readback", &frame->readback, err);
     if (st)

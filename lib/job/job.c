@@ -103,6 +103,11 @@ static const struct key keys[] = {
       "output pattern for the EXR frames; a run of '#' is the zero-padded frame number"),
     K("resolution", KT_UINT2, JOB(width_px), 1, 16384, "[640, 360]", 0,
       "image width and height in pixels"),
+    K("layers", KT_STRLIST, JOB(layers), NOLO, NOHI,
+      "[direct, indirect, albedo, normal, depth, motion]", 0,
+      "the EXR's layers beside the beauty (RGBA): direct, indirect, albedo, normal, depth, "
+      "motion; only these are read back from the device",
+      .count_offset = JOB(layer_count)),
     K("frames.start", KT_INT, JOB(frame_start), 0, NOHI, "0", 0, "first frame to render"),
     K("frames.end", KT_INT, JOB(frame_end), -1, NOHI, "-1", 0,
       "last frame to render, inclusive; -1: to the end of the animation"),
@@ -1055,6 +1060,17 @@ static enum rb_status validate(struct ctx *c)
         return fail(c, mark_of(m, "frames.end", "frames.start", &c->root), RB_E_INVALID,
                     "'frames.end' (%d) must be -1 or >= 'frames.start' (%d)", job->frame_end,
                     job->frame_start);
+    job->layer_mask = 0;
+    for (size_t i = 0; i < job->layer_count; i++) {
+        uint32_t l = 0;
+        while (l < RB_LAYER_COUNT && strcmp(job->layers[i], rb_layer_name((enum rb_layer)l)))
+            l++;
+        if (l == RB_LAYER_COUNT)
+            return fail(c, mark_of(m, "layers", NULL, &c->root), RB_E_INVALID,
+                        "unknown layer '%s' (direct, indirect, albedo, normal, depth, motion)",
+                        job->layers[i]);
+        job->layer_mask |= 1u << l;
+    }
     struct rb_err why = RB_ERR_INIT;
     if (rb_job_check_output(job->output, job->frame_start, job->frame_end, &why))
         return fail(c, mark_of(m, "output", NULL, &c->root), RB_E_INVALID, "%s", why.msg);
@@ -1139,6 +1155,7 @@ void rb_job_rehash(struct rb_job *job)
     h = h_str(h, job->scene_path);
     h = h_u32(h, job->width_px);
     h = h_u32(h, job->height_px);
+    h = h_u32(h, job->layer_mask);
     h = h_f64(h, job->rate_fps);
 
     enum rb_interp interp =
@@ -1354,6 +1371,7 @@ void rb_job_destroy(struct rb_job *job)
     free(job->camera.node);
     free(job->camera.keys);
     free_strlist(job->animation.clips, job->animation.clip_count);
+    free_strlist(job->layers, job->layer_count);
     free(job->lights);
     free(job->environment.map);
     free(job->color.config);

@@ -75,6 +75,9 @@ struct rb_job {
     char *path;       /* the job file as given */
     char *scene_path; /* resolved relative to the job file's directory */
     char *output;     /* output pattern, resolved relative to the job file; '#' run = frame */
+    char **layers;    /* names of the EXR's layers beside the beauty (rb_layer_name) */
+    size_t layer_count;
+    uint32_t layer_mask; /* the same as bits of enum rb_layer; resolved by the parser */
     uint32_t width_px, height_px;
     int frame_start, frame_end; /* inclusive; frame_end == -1: to the end of the animation */
     double rate_fps;

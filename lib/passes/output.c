@@ -13,9 +13,11 @@ struct rb_pass_output {
     struct rb_gpu_buffer nonfinite; /* one uint32, host-visible: zeroed, then added to */
 };
 
-/* The push constants of shaders/output.comp: the band of rows one dispatch writes. */
+/* The push constants of shaders/output.comp: the band of rows one dispatch writes, and what a
+ * pixel holds (the job's layers, packed: rb_layer_offset). */
 struct band {
     uint32_t first_row, row_count;
+    uint32_t layer_mask, floats_per_pixel;
 };
 
 static const struct rb_pass_binding bindings[] = {
@@ -81,13 +83,14 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
     /* The readback outgrows maxStorageBufferRange (1920x1080 is 166 MB, lavapipe binds 128 MiB):
      * it is written one band of rows at a time, each bound as its own aligned range, so the host
      * still reads one buffer, rows top to bottom. rb_frame_init checked that a band fits. */
-    VkDeviceSize row_bytes = (VkDeviceSize)frame->width_px * RB_OUT_FLOATS * sizeof(float);
+    VkDeviceSize row_bytes = (VkDeviceSize)frame->width_px * frame->readback_floats * sizeof(float);
     uint32_t band_rows = rb_gpu_storage_band_rows(p->gpu, row_bytes, frame->height_px);
     if (band_rows == 0)
         RB_BUG("readback rows of %llu bytes fit no storage binding", (unsigned long long)row_bytes);
     for (uint32_t first = 0; first < frame->height_px; first += band_rows) {
         uint32_t rows = frame->height_px - first;
-        struct band band = {first, rows < band_rows ? rows : band_rows};
+        struct band band = {first, rows < band_rows ? rows : band_rows, frame->layer_mask,
+                            frame->readback_floats};
         struct rb_pass_bindings b = {.pass = &p->pass};
         rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_GLOBALS, &frame->globals);
         rb_pass_bind_image(&b, RB_BIND_OUTPUT_BEAUTY, frame->beauty->view, VK_NULL_HANDLE);

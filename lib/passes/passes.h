@@ -67,7 +67,9 @@ struct rb_frame {
     struct rb_gpu_image direct;
     const struct rb_gpu_image *beauty; /* what the integrator composes; direct's own image for
                                         * the direct integrator */
-    struct rb_gpu_buffer readback;     /* RB_OUT_FLOATS per pixel, host-visible */
+    struct rb_gpu_buffer readback;     /* readback_floats per pixel, host-visible */
+    uint32_t layer_mask;               /* the job's layers: what the output pass packs */
+    uint32_t readback_floats;          /* rb_layer_stride(layer_mask) */
 };
 
 enum {

@@ -760,6 +760,8 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct r
         .width_px = ref->width_px,
         .height_px = ref->height_px,
         .pixels = ref->pixels,
+        .floats_per_pixel = RB_OUT_FLOATS,
+        .layer_mask = RB_LAYERS_ALL,
         .passes = &ref->trace,
         .pass_count = 1,
         .world_to_camera = ref->cam.world_to_camera,

@@ -1,6 +1,6 @@
 /* A run of a job: the renderer (the GPU frame driver or the CPU reference) behind one result
  * type, the --resume decision, and the frame's files. Layers go into the EXR in the order of
- * RB_OUT_* (shaders/common/shared.h); the metadata holds nothing that depends on the time of the
+ * enum rb_layer (core.h); the metadata holds nothing that depends on the time of the
  * render, so equal pixels give equal bytes.
  * Writing is off the critical path: a rendered frame is copied into one of QUEUE_DEPTH pending
  * entries and written (layer split, EXR compression, preview, sidecar, atomic renames) by one
@@ -212,7 +212,8 @@ enum rb_render_verdict rb_render_resume_verdict(const struct rb_render *r, const
 
 /* ---- writing -------------------------------------------------------------------------------- */
 
-/* Splits the packed readback into the EXR's layers and writes it with its metadata. */
+/* Splits the packed pixels into the EXR's layers (the beauty and the job's layers, in
+ * RB_LAYER order) and writes it with its metadata. */
 static enum rb_status write_exr(const struct rb_render *r, const char *path,
                                 const struct rb_frame_result *f, struct rb_err *err)
 {
@@ -221,28 +222,30 @@ static enum rb_status write_exr(const struct rb_render *r, const char *path,
     static const char *const rgb[] = {"R", "G", "B"};
     static const char *const xyz[] = {"X", "Y", "Z"};
     static const char *const z[] = {"Z"};
-    static const struct {
-        const char *name;
-        uint32_t offset, count;
-        const char *const *channels;
-    } layers[] = {
-        {NULL, RB_OUT_BEAUTY, 4, rgba},        {"direct", RB_OUT_DIRECT, 3, rgb},
-        {"indirect", RB_OUT_INDIRECT, 3, rgb}, {"albedo", RB_OUT_ALBEDO, 3, rgb},
-        {"normal", RB_OUT_NORMAL, 3, xyz},     {"depth", RB_OUT_DEPTH, 1, z},
-        {"motion", RB_OUT_MOTION, 2, xyz},
-    };
-    enum { LAYER_COUNT = sizeof(layers) / sizeof(layers[0]) };
-    struct rb_io_layer out[LAYER_COUNT];
+    static const char *const *const channels[RB_LAYER_COUNT] = {rgb, rgb, rgb, xyz, z, xyz};
+    struct rb_io_layer out[1 + RB_LAYER_COUNT];
+    uint32_t offset[1 + RB_LAYER_COUNT], layer_count = 0;
+    out[layer_count] = (struct rb_io_layer){.channel_count = 4, .channel_names = rgba};
+    offset[layer_count++] = 0;
+    for (uint32_t l = 0; l < RB_LAYER_COUNT; l++) {
+        if (!(r->job->layer_mask & (1u << l)))
+            continue;
+        if (!(f->layer_mask & (1u << l)))
+            return rb_errf(err, RB_E_INVALID, "'%s': the renderer made no '%s' layer", path,
+                           rb_layer_name((enum rb_layer)l));
+        out[layer_count] = (struct rb_io_layer){.name = rb_layer_name((enum rb_layer)l),
+                                                .channel_count = rb_layer_width((enum rb_layer)l),
+                                                .channel_names = channels[l]};
+        offset[layer_count++] = rb_layer_offset(f->layer_mask, (enum rb_layer)l);
+    }
     float *p = r->scratch;
-    for (int l = 0; l < LAYER_COUNT; l++) {
+    for (uint32_t l = 0; l < layer_count; l++) {
+        uint32_t count = out[l].channel_count;
         for (size_t i = 0; i < n; i++)
-            for (uint32_t c = 0; c < layers[l].count; c++)
-                p[i * layers[l].count + c] = f->pixels[i * RB_OUT_FLOATS + layers[l].offset + c];
-        out[l] = (struct rb_io_layer){.name = layers[l].name,
-                                      .channel_count = layers[l].count,
-                                      .channel_names = layers[l].channels,
-                                      .pixels = p};
-        p += n * layers[l].count;
+            for (uint32_t c = 0; c < count; c++)
+                p[i * count + c] = f->pixels[i * f->floats_per_pixel + offset[l] + c];
+        out[l].pixels = p;
+        p += n * count;
     }
     struct rb_io_attr attrs[] = {
         {.name = "raybundle:version", .type = RB_IO_ATTR_STRING, .s = RB_VERSION},
@@ -264,7 +267,7 @@ static enum rb_status write_exr(const struct rb_render *r, const char *path,
      * layout for row vectors: the floats go over unchanged. */
     memcpy(attrs[6].m, f->world_to_camera.m, sizeof(attrs[6].m));
     memcpy(attrs[7].m, f->world_to_ndc.m, sizeof(attrs[7].m));
-    return rb_io_exr_write(path, f->width_px, f->height_px, out, LAYER_COUNT, attrs, attr_count,
+    return rb_io_exr_write(path, f->width_px, f->height_px, out, layer_count, attrs, attr_count,
                            err);
 }
 
@@ -280,7 +283,7 @@ static enum rb_status write_preview(const struct rb_render *r, const char *exr_p
     size_t n = (size_t)f->width_px * f->height_px;
     for (size_t i = 0; i < n; i++) {
         for (int c = 0; c < 3; c++)
-            r->scratch[i * 4 + c] = f->pixels[i * RB_OUT_FLOATS + RB_OUT_BEAUTY + c];
+            r->scratch[i * 4 + c] = f->pixels[i * f->floats_per_pixel + c]; /* the beauty */
         r->scratch[i * 4 + 3] = 1.0f;
     }
     const struct rb_job *job = r->job;
@@ -401,8 +404,9 @@ static enum rb_status hand_over(struct rb_render *r, const char *path,
         st = rb_errf(err, RB_E_INVALID, "frame %d: path too long: '%s'", f->frame, path);
         goto out;
     }
+    /* Only the layers the job writes are in a GPU frame's readback (floats_per_pixel). */
     memcpy(e->pixels, f->pixels,
-           (size_t)f->width_px * f->height_px * RB_OUT_FLOATS * sizeof(float));
+           (size_t)f->width_px * f->height_px * f->floats_per_pixel * sizeof(float));
     if (f->pass_count)
         memcpy(e->passes, f->passes, f->pass_count * sizeof(*e->passes));
     e->f = *f;

@@ -80,8 +80,18 @@ struct rb_gpu_shadow_view {
                      * radians) or a length (directional, in world units) */
 };
 
-/* A frame's result: these floats per pixel, in this order, for one readback (the GPU's output
- * pass) or straight from the CPU reference. */
+#ifdef VULKAN
+/* Bits of a job's layer mask: enum rb_layer in lib/core/core.h (C has the enum). */
+#define RB_LAYER_DIRECT 0u
+#define RB_LAYER_INDIRECT 1u
+#define RB_LAYER_ALBEDO 2u
+#define RB_LAYER_NORMAL 3u
+#define RB_LAYER_DEPTH 4u
+#define RB_LAYER_MOTION 5u
+#endif
+
+/* A frame's result with every layer: these floats per pixel, in this order (the reference's
+ * result; the GPU's readback when the job writes every layer: rb_layer_offset). */
 #define RB_OUT_BEAUTY 0    /* RGBA */
 #define RB_OUT_DIRECT 4    /* RGB */
 #define RB_OUT_INDIRECT 7  /* RGB */

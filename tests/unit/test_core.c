@@ -11,6 +11,7 @@
 #include <cmocka.h>
 
 #include "core/core.h"
+#include "shared.h"
 
 static void test_errf_and_prefix(void **state)
 {
@@ -128,12 +129,34 @@ static void test_log(void **state)
     rb_log_set_sink(NULL, NULL);
 }
 
+/* The packed layout of a frame's layers: with every layer it is shaders' RB_OUT_* layout. */
+static void test_layers(void **state)
+{
+    (void)state;
+    static const uint32_t out[RB_LAYER_COUNT] = {RB_OUT_DIRECT, RB_OUT_INDIRECT, RB_OUT_ALBEDO,
+                                                 RB_OUT_NORMAL, RB_OUT_DEPTH,    RB_OUT_MOTION};
+    for (uint32_t l = 0; l < RB_LAYER_COUNT; l++)
+        assert_int_equal(rb_layer_offset(RB_LAYERS_ALL, (enum rb_layer)l), out[l]);
+    assert_int_equal(rb_layer_stride(RB_LAYERS_ALL), RB_OUT_FLOATS);
+    /* depth alone follows the beauty; a pixel stays a multiple of 16 bytes */
+    uint32_t depth = 1u << RB_LAYER_DEPTH, dn = depth | 1u << RB_LAYER_NORMAL;
+    assert_int_equal(rb_layer_offset(depth, RB_LAYER_DEPTH), 4);
+    assert_int_equal(rb_layer_stride(depth), 8);
+    assert_int_equal(rb_layer_offset(dn, RB_LAYER_NORMAL), 4);
+    assert_int_equal(rb_layer_offset(dn, RB_LAYER_DEPTH), 7);
+    assert_int_equal(rb_layer_stride(dn), 8);
+    assert_int_equal(rb_layer_stride(0), 4);
+    assert_string_equal(rb_layer_name(RB_LAYER_MOTION), "motion");
+    assert_null(rb_layer_name(RB_LAYER_COUNT));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_errf_and_prefix), cmocka_unit_test(test_status_names),
         cmocka_unit_test(test_strings),         cmocka_unit_test(test_hash),
         cmocka_unit_test(test_read_file),       cmocka_unit_test(test_log),
+        cmocka_unit_test(test_layers),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
