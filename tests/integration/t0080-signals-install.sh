@@ -4,38 +4,30 @@
 # `make install` honours PREFIX and DESTDIR.
 . tests/integration/lib.sh
 
-"$RB" render jobs/demo.yaml --size 160x90 --frames 0-47 --out "$T/int" -q 2>"$T/stderr" &
-pid=$!
-i=0
-while [ ! -e "$T/int/frame.0001.timing.json" ] && [ $i -lt 600 ]; do
-    sleep 0.1
-    i=$((i + 1))
-done
-kill -INT $pid
-wait $pid
-status=$?
-expect_exit 1 "SIGINT stops the render with status 1"
-stderr_has "interrupted" "the interruption is reported"
-check "the render stopped early" test ! -e "$T/int/frame.0047.exr"
-check "no temporary file is left" sh -c "! ls '$T/int' | grep -q tmp"
-for exr in "$T"/int/*.exr; do
-    check "$(basename "$exr") is complete" sh -c "oiiotool --info '$exr' >/dev/null"
-done
-
-# SIGTERM (a scheduler's stop) is handled like SIGINT.
-"$RB" render jobs/demo.yaml --size 160x90 --frames 0-47 --out "$T/term" -q 2>"$T/stderr" &
-pid=$!
-i=0
-while [ ! -e "$T/term/frame.0001.timing.json" ] && [ $i -lt 600 ]; do
-    sleep 0.1
-    i=$((i + 1))
-done
-kill -TERM $pid
-wait $pid
-status=$?
-expect_exit 1 "SIGTERM stops the render with status 1"
-stderr_has "interrupted" "the SIGTERM is reported"
-check "no temporary file is left after SIGTERM" sh -c "! ls '$T/term' | grep -q tmp"
+# stop_render SIGNAL: a demo render gets SIGNAL once its second frame is written; it must
+# stop early with status 1, say so, and leave only complete files.
+stop_render() {
+    dir="$T/$1"
+    "$RB" render jobs/demo.yaml --size 160x90 --frames 0-47 --out "$dir" -q 2>"$T/stderr" &
+    pid=$!
+    i=0
+    while [ ! -e "$dir/frame.0001.timing.json" ] && [ $i -lt 600 ]; do
+        sleep 0.1
+        i=$((i + 1))
+    done
+    kill -"$1" $pid
+    wait $pid
+    status=$?
+    expect_exit 1 "$1 stops the render with status 1"
+    stderr_has "interrupted" "$1: the interruption is reported"
+    check "$1: the render stopped early" test ! -e "$dir/frame.0047.exr"
+    check "$1: no temporary file is left" sh -c "! ls '$dir' | grep -q tmp"
+    for exr in "$dir"/*.exr; do
+        check "$1: $(basename "$exr") is complete" sh -c "oiiotool --info '$exr' >/dev/null"
+    done
+}
+stop_render INT
+stop_render TERM # a scheduler's stop is handled like ^C
 
 # SIGINT during a reference frame: sampling stops, and the partial frame is not written under
 # the frame's name, so --resume renders it again.
