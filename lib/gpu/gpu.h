@@ -173,6 +173,10 @@ void rb_gpu_image_barrier(struct rb_gpu *gpu, VkCommandBuffer cmd, struct rb_gpu
 /* A global memory barrier between everything before and everything after (simple and correct;
  * passes are few and large). */
 void rb_gpu_barrier(VkCommandBuffer cmd);
+/* A global memory barrier from src_stages/src_access to dst_stages/dst_access. */
+void rb_gpu_memory_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 src_stages,
+                           VkAccessFlags2 src_access, VkPipelineStageFlags2 dst_stages,
+                           VkAccessFlags2 dst_access);
 
 /* ---- barriers between passes (barrier.c) --------------------------------------------------- */
 

@@ -139,14 +139,16 @@ void rb_gpu_image_barrier(struct rb_gpu *gpu, VkCommandBuffer cmd, struct rb_gpu
     vkCmdPipelineBarrier2(cmd, &dep);
 }
 
-void rb_gpu_barrier(VkCommandBuffer cmd)
+void rb_gpu_memory_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 src_stages,
+                           VkAccessFlags2 src_access, VkPipelineStageFlags2 dst_stages,
+                           VkAccessFlags2 dst_access)
 {
     VkMemoryBarrier2 b = {
         .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
-        .srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-        .srcAccessMask = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
-        .dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-        .dstAccessMask = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
+        .srcStageMask = src_stages,
+        .srcAccessMask = src_access,
+        .dstStageMask = dst_stages,
+        .dstAccessMask = dst_access,
     };
     VkDependencyInfo dep = {
         .sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
@@ -154,4 +156,11 @@ void rb_gpu_barrier(VkCommandBuffer cmd)
         .pMemoryBarriers = &b,
     };
     vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+void rb_gpu_barrier(VkCommandBuffer cmd)
+{
+    VkAccessFlags2 all = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT;
+    rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, all,
+                          VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, all);
 }

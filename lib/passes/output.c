@@ -70,16 +70,10 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
 {
     /* The count starts from zero on the device, ordered before the shader's atomic adds. */
     vkCmdFillBuffer(cmd, p->nonfinite.buffer, 0, VK_WHOLE_SIZE, 0);
-    VkMemoryBarrier2 zeroed = {
-        .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
-        .srcStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
-        .srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT,
-        .dstStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-        .dstAccessMask = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-    };
-    vkCmdPipelineBarrier2(cmd, &(VkDependencyInfo){.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
-                                                   .memoryBarrierCount = 1,
-                                                   .pMemoryBarriers = &zeroed});
+    rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                          VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_STORAGE_READ_BIT |
+                              VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
     /* The readback outgrows maxStorageBufferRange (1920x1080 is 166 MB, lavapipe binds 128 MiB):
      * it is written one band of rows at a time, each bound as its own aligned range, so the host
      * still reads one buffer, rows top to bottom. rb_frame_init checked that a band fits. */
@@ -112,17 +106,9 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
         vkCmdDispatch(cmd, (frame->width_px + 7) / 8, (band.row_count + 7) / 8, 1);
     }
     /* Make the shader writes visible to the host's read after the fence. */
-    VkMemoryBarrier2 mb = {
-        .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
-        .srcStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-        .srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-        .dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT,
-        .dstAccessMask = VK_ACCESS_2_HOST_READ_BIT,
-    };
-    VkDependencyInfo dep = {.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
-                            .memoryBarrierCount = 1,
-                            .pMemoryBarriers = &mb};
-    vkCmdPipelineBarrier2(cmd, &dep);
+    rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
+                          VK_ACCESS_2_HOST_READ_BIT);
 }
 
 uint32_t rb_pass_output_nonfinite_count(const struct rb_pass_output *p)

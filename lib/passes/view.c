@@ -225,37 +225,22 @@ static void depth_barrier(VkCommandBuffer cmd, const struct rb_gpu_image *depth)
                                                    .pImageMemoryBarriers = &b});
 }
 
-static void memory_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 src_stage,
-                           VkAccessFlags2 src_access, VkPipelineStageFlags2 dst_stage,
-                           VkAccessFlags2 dst_access)
-{
-    VkMemoryBarrier2 b = {
-        .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
-        .srcStageMask = src_stage,
-        .srcAccessMask = src_access,
-        .dstStageMask = dst_stage,
-        .dstAccessMask = dst_access,
-    };
-    vkCmdPipelineBarrier2(cmd, &(VkDependencyInfo){.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
-                                                   .memoryBarrierCount = 1,
-                                                   .pMemoryBarriers = &b});
-}
-
 /* A list batch starts from empty heads on its layers and an empty pool. */
 static void clear_list(VkCommandBuffer cmd, const struct rb_view_list *list, uint32_t first_layer,
                        uint32_t count)
 {
     /* Whatever read the last batch's lists is done before they are cleared. */
-    memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                   VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
-                   VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                          VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
+                          VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
     vkCmdFillBuffer(cmd, list->counter.buffer, 0, sizeof(struct rb_gpu_list_counter), 0);
     VkClearColorValue none = {.uint32 = {RB_NONE, RB_NONE, RB_NONE, RB_NONE}};
     VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, first_layer, count};
     vkCmdClearColorImage(cmd, list->heads.image, VK_IMAGE_LAYOUT_GENERAL, &none, 1, &range);
-    memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                   VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
-                   VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+    rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                          VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_STORAGE_READ_BIT |
+                              VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
 }
 
 void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const struct rb_frame *frame,
@@ -371,9 +356,9 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
     }
     /* The counters are read on the host after the submit. */
     if (output == RB_VIEW_OUTPUT_LIST)
-        memory_barrier(cmd, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
-                       VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
-                       VK_ACCESS_2_HOST_READ_BIT);
+        rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                              VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
+                              VK_ACCESS_2_HOST_READ_BIT);
     if (p->gpu->end_label)
         p->gpu->end_label(cmd);
 }

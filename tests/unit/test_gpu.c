@@ -151,16 +151,9 @@ static void test_many_bindings(void **state)
     vkCmdBindPipeline(gpu->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipe);
     rb_gpu_push_bindings(gpu, gpu->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout.pipeline_layout, &b);
     vkCmdDispatch(gpu->cmd, 1, 1, 1);
-    VkMemoryBarrier2 mb = {
-        .sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
-        .srcStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-        .srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-        .dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT,
-        .dstAccessMask = VK_ACCESS_2_HOST_READ_BIT,
-    };
-    vkCmdPipelineBarrier2(gpu->cmd, &(VkDependencyInfo){.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
-                                                        .memoryBarrierCount = 1,
-                                                        .pMemoryBarriers = &mb});
+    rb_gpu_memory_barrier(gpu->cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
+                          VK_ACCESS_2_HOST_READ_BIT);
     st = rb_gpu_submit_wait(gpu, &err); /* fails on any validation message */
     if (st)
         fail_msg("%s", err.msg);
