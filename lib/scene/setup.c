@@ -205,16 +205,6 @@ static struct rb_world_light default_light(const struct rb_scene_setup *s)
     };
 }
 
-static uint32_t punctual_count(const struct rb_job *job, const struct rb_scene *scene)
-{
-    uint32_t n = (uint32_t)job->light_count;
-    if (job->use_scene_lights)
-        for (uint32_t i = 0; i < scene->node_count; i++)
-            if (scene->nodes[i].in_scene && scene->nodes[i].light < scene->light_count)
-                n++;
-    return n;
-}
-
 enum rb_status rb_scene_setup_init(const struct rb_job *job, const struct rb_scene *scene,
                                    const float *env_rgba, uint32_t env_width_px,
                                    uint32_t env_height_px, struct rb_scene_setup *out,
@@ -229,7 +219,9 @@ enum rb_status rb_scene_setup_init(const struct rb_job *job, const struct rb_sce
         return st;
     struct rb_scene_setup s = {0};
     animation_bounds(scene, job, clips, clip_count, pose, &s);
-    s.punctual_count = punctual_count(job, scene);
+    /* The scene's and the job's lights, counted as the frames will gather them (s has no
+     * default light yet). */
+    s.punctual_count = rb_scene_world_lights(job, scene, &s, pose, NULL, 0);
     s.has_emitters = has_emitters(scene, pose);
     s.has_environment = !env_is_black(job, env_rgba, env_width_px, env_height_px);
     float cover[6];
