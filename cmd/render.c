@@ -308,13 +308,6 @@ static int exit_for(enum rb_status st, bool rendering)
     return st == RB_E_VULKAN || st == RB_E_NOMEM ? RB_EXIT_FAILED : RB_EXIT_USAGE;
 }
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
-
 static void progress(bool tty, int done, int total, int frame, double sec_per_frame, bool skipped)
 {
     if (tty) {
@@ -438,7 +431,7 @@ static int run(struct options *o, int argc, char **argv)
     int total = last - first + 1, done = 0, rendered = 0, skipped = 0, stale = 0;
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
-    double started = now_s();
+    double started = rb_monotonic_s();
     for (int f = first; f <= last; f++) {
         if (interrupted) {
             cmd_error("interrupted: frames %d to %d were not rendered", f, last);
@@ -490,7 +483,7 @@ static int run(struct options *o, int argc, char **argv)
         done++;
         rendered++;
         if (!o->quiet)
-            progress(tty, done, total, f, (now_s() - started) / rendered, false);
+            progress(tty, done, total, f, (rb_monotonic_s() - started) / rendered, false);
         if (rendered == 1 && f < last &&
             ((st = rb_render_flush(r, &err)) ||
              (st = rb_render_check_space(path, job->color.preview, last - f, &err)))) {
@@ -513,7 +506,7 @@ static int run(struct options *o, int argc, char **argv)
                dir, rendered);
         if (o->resume)
             printf(", %d kept, %d rendered again (another job)", skipped, stale);
-        printf(", %.1f s\n", now_s() - started);
+        printf(", %.1f s\n", rb_monotonic_s() - started);
     }
 out:
     cmd_end_bar();

@@ -82,6 +82,8 @@ unsigned rb_log_warning_count(void);
 char *rb_strdup(const char *s);
 /* Copies at most size-1 bytes and always terminates. Returns strlen(src). */
 size_t rb_strlcpy(char *dst, const char *src, size_t size);
+/* Seconds on the monotonic clock, for measuring durations (thread-safe). */
+double rb_monotonic_s(void);
 /* Reads a whole file into a new NUL-terminated buffer. */
 enum rb_status rb_read_file(const char *path, char **out, size_t *out_size, struct rb_err *err);
 

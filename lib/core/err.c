@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 enum rb_status rb_errf(struct rb_err *err, enum rb_status code, const char *fmt, ...)
 {
@@ -130,4 +131,11 @@ uint64_t rb_hash64(const void *data, size_t size, uint64_t seed)
         h *= 0x100000001b3ull;
     }
     return h;
+}
+
+double rb_monotonic_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }

@@ -133,13 +133,6 @@ static enum rb_status embree_check(struct rb_reference *ref, const char *what, s
                    ref->embree_msg[0] ? ref->embree_msg : "no message", (int)ref->embree_code);
 }
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
-
 static float srgb_to_linear(float c)
 {
     return c <= 0.04045f ? c / 12.92f : powf((c + 0.055f) / 1.055f, 2.4f);
@@ -696,7 +689,7 @@ static uint64_t run_stage(struct rb_reference *ref, struct stage *st)
 enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct rb_frame_result *out,
                                    struct rb_err *err)
 {
-    double start = now_s();
+    double start = rb_monotonic_s();
     double rate = ref->job->rate_fps > 0.0 ? ref->job->rate_fps : 1.0;
     double t = frame / rate, t_prev = (frame - 1) / rate;
     enum rb_status st = prepare_frame(ref, frame, t, t_prev, err);
@@ -704,7 +697,7 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct r
         rb_err_prefix(err, "reference frame %d", frame);
         return st;
     }
-    double trace_start = now_s();
+    double trace_start = rb_monotonic_s();
     size_t px = (size_t)ref->width_px * ref->height_px;
     memset(ref->accum, 0, px * ACCUM * sizeof(double));
 
@@ -725,7 +718,7 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct r
         if (done > 1 && pass < MAX_PASS_SPP)
             pass *= 2;
         bool go_on = ref->on_pass ? ref->on_pass(ref->user, done, spp_total) : true;
-        if (!go_on || (limit > 0.0 && now_s() - start >= limit))
+        if (!go_on || (limit > 0.0 && rb_monotonic_s() - start >= limit))
             break;
     }
 
@@ -752,8 +745,8 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct r
         rb_log(RB_LOG_WARN, "frame %d: %u non-finite values (NaN or Inf) in the output", frame,
                nonfinite);
 
-    ref->trace =
-        (struct rb_pass_time){.name = "trace", .cpu_ms = (now_s() - trace_start) * 1e3, .count = 1};
+    ref->trace = (struct rb_pass_time){
+        .name = "trace", .cpu_ms = (rb_monotonic_s() - trace_start) * 1e3, .count = 1};
     *out = (struct rb_frame_result){
         .frame = frame,
         .time_s = t,

@@ -317,13 +317,6 @@ static enum rb_status write_timing(const struct rb_render *r, const char *exr_pa
     return rb_io_timing_write(path, &t, err);
 }
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
-
 /* ---- the writer ------------------------------------------------------------------------------ */
 
 static void *writer_main(void *arg)
@@ -424,7 +417,7 @@ out:
 enum rb_status rb_render_frame(struct rb_render *r, int frame, const char *path,
                                struct rb_render_frame_info *info, struct rb_err *err)
 {
-    double t0 = now_s();
+    double t0 = rb_monotonic_s();
     struct rb_frame_result f;
     r->was_stopped = false;
     enum rb_status st = r->ref ? rb_reference_render(r->ref, frame, &f, err)
@@ -439,7 +432,7 @@ enum rb_status rb_render_frame(struct rb_render *r, int frame, const char *path,
                                           .nonfinite_count = f.nonfinite_count};
     if (info->is_partial)
         return RB_OK; /* never under the frame's name: --resume renders it again */
-    info->wall_ms = (now_s() - t0) * 1e3;
+    info->wall_ms = (rb_monotonic_s() - t0) * 1e3;
     return hand_over(r, path, &f, info->wall_ms, err);
 }
 
