@@ -395,12 +395,8 @@ static int run(struct options *o, int argc, char **argv)
         rc = exit_for(st, false);
         goto out;
     }
+    /* The output pattern was checked against the range by the job parser and apply_cli. */
     int first = job->frame_start, last = rb_render_last_frame(job, scene);
-    if ((st = rb_job_check_output(job->output, first, last, &err))) {
-        cmd_error("%s", err.msg);
-        rc = RB_EXIT_USAGE;
-        goto out;
-    }
     unsigned threads = 0;
     if (o->threads)
         sscanf(o->threads, "%u", &threads);
