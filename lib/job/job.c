@@ -65,6 +65,7 @@ static const char *const integrator_names[] = {NULL, "direct", "bdpt", "hybrid",
 static const char *const interp_names[] = {NULL, "linear", "catmull-rom"};
 static const char *const path_names[] = {NULL, "full", "direct", "bdpt"};
 static const char *const pixel_filter_names[] = {NULL, "center", "box"};
+static const char *const strategy_names[] = {NULL, "mis", "vpl", "bundle"};
 static const char *const light_names[] = {NULL, "point", "spot", "directional"};
 static const char *const default_light_names[] = {NULL, "auto", "on", "off"};
 
@@ -184,6 +185,37 @@ static const struct key keys[] = {
       "0.002", 0, "shadow depth bias as a fraction of the distance to the light"),
     K("integrator.direct.pcf_radius", KT_FLOAT, JOB(integrator.direct.pcf_radius_px), 0, NOHI,
       "1.5", 0, "radius of the 16-tap PCF shadow filter in shadow-map pixels"),
+    K("integrator.bdpt.vpls", KT_UINT, JOB(integrator.bdpt.vpls), 1, 65536, "21", 0,
+      "bdpt: virtual point lights per frame"),
+    K("integrator.bdpt.bundles", KT_UINT, JOB(integrator.bdpt.bundles), 1, 65536, "21", 0,
+      "bdpt: global ray-bundles per frame"),
+    K("integrator.bdpt.rsm_size", KT_UINT, JOB(integrator.bdpt.rsm_size_px), 16, 4096, "256", 0,
+      "bdpt: reflective shadow map size in pixels (per cube face for point lights)"),
+    K("integrator.bdpt.vpl_size", KT_UINT, JOB(integrator.bdpt.vpl_size_px), 16, 4096, "256", 0,
+      "bdpt: VPL paraboloid shadow map size in pixels"),
+    K("integrator.bdpt.bundle_size", KT_UINT, JOB(integrator.bdpt.bundle_size_px), 16, 4096, "256",
+      0, "bdpt: ray-bundle head-pointer image size in pixels"),
+    K("integrator.bdpt.node_buffer_kib", KT_UINT, JOB(integrator.bdpt.node_buffer_kib), 1, 131072,
+      "20480", 0, "bdpt: ray-bundle node buffer in KiB (20-byte nodes)"),
+    K("integrator.bdpt.interleave", KT_UINT, JOB(integrator.bdpt.interleave), 1, 8, "4", 0,
+      "bdpt: spatial interleaving, n x n sub-images each with its own VPLs and bundles"),
+    K("integrator.bdpt.filter_radius", KT_UINT, JOB(integrator.bdpt.filter_radius_px), 0, 16, "4",
+      0, "bdpt: geometry-aware filter radius in pixels; 0: no filter"),
+    K("integrator.bdpt.filter_depth", KT_FLOAT, JOB(integrator.bdpt.filter_depth), 0, NOHI, "0.05",
+      0, "bdpt: relative depth difference at which the filter stops"),
+    K("integrator.bdpt.filter_normal", KT_FLOAT, JOB(integrator.bdpt.filter_normal), -1, 1, "0.9",
+      0, "bdpt: cosine between normals below which the filter stops"),
+    K("integrator.bdpt.clamp", KT_FLOAT, JOB(integrator.bdpt.clamp), 0, NOHI, "100", 0,
+      "bdpt: bound on the geometry term of two-bounce paths, in units of one over the scene "
+      "diagonal squared; 0: no clamp"),
+    K("integrator.bdpt.vpl_bias", KT_FLOAT, JOB(integrator.bdpt.vpl_bias), 0, NOHI, "0.01", 0,
+      "bdpt: VPL shadow-map depth bias as a fraction of the distance to the VPL"),
+    K("integrator.bdpt.view_triangles", KT_UINT, JOB(integrator.bdpt.view_triangles), 0, UINT32_MAX,
+      "0", 0,
+      "bdpt: triangle budget of the simplified mesh the small views draw; 0: the full mesh"),
+    K("integrator.bdpt.strategies", KT_ENUM, JOB(integrator.bdpt.strategies), NOLO, NOHI, "mis", 0,
+      "bdpt: mis weights VPL and bundle strategies; vpl or bundle use one alone",
+      ENUM(strategy_names)),
     K("integrator.reference.spp", KT_UINT, JOB(integrator.reference.spp), 1, 1048576, "64", 0,
       "reference: samples per pixel"),
     K("integrator.reference.max_bounces", KT_UINT, JOB(integrator.reference.max_bounces), 0, 64,
@@ -1217,6 +1249,23 @@ void rb_job_rehash(struct rb_job *job)
         h = h_u32(h, job->integrator.direct.shadow_size_px);
         h = h_f32(h, job->integrator.direct.shadow_bias);
         h = h_f32(h, job->integrator.direct.pcf_radius_px);
+    }
+    if (kind == RB_INTEGRATOR_BDPT) {
+        const struct rb_job_bdpt *b = &job->integrator.bdpt;
+        h = h_u32(h, b->vpls);
+        h = h_u32(h, b->bundles);
+        h = h_u32(h, b->rsm_size_px);
+        h = h_u32(h, b->vpl_size_px);
+        h = h_u32(h, b->bundle_size_px);
+        h = h_u32(h, b->node_buffer_kib); /* an overflowing buffer drops fragments */
+        h = h_u32(h, b->interleave);
+        h = h_u32(h, b->filter_radius_px);
+        h = h_f32(h, b->filter_depth);
+        h = h_f32(h, b->filter_normal);
+        h = h_f32(h, b->clamp);
+        h = h_f32(h, b->vpl_bias);
+        h = h_u32(h, b->view_triangles);
+        h = h_u32(h, (uint32_t)b->strategies);
     }
     job->hash = h;
 }

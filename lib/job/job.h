@@ -32,6 +32,14 @@ enum rb_path_space {
                            * punctual lights, the environment's direct light */
 };
 
+/* Which bdpt strategies count (BDPT.md): all of them weighted by MIS, or one side alone. */
+enum rb_bdpt_strategies {
+    RB_BDPT_STRATEGIES_DEFAULT = 0, /* resolves to MIS */
+    RB_BDPT_STRATEGIES_MIS,         /* VPL and bundle strategies, balance heuristic */
+    RB_BDPT_STRATEGIES_VPL,         /* one-bounce paths from VPLs alone, unweighted */
+    RB_BDPT_STRATEGIES_BUNDLE,      /* one-bounce paths from bundles alone, unweighted */
+};
+
 /* Where the reference's samples pass through a pixel. */
 enum rb_pixel_filter {
     RB_PIXEL_FILTER_DEFAULT = 0, /* resolves to CENTER */
@@ -117,6 +125,24 @@ struct rb_job {
             float shadow_bias;       /* fraction of the distance to the light; default 0.002 */
             float pcf_radius_px;     /* radius of the 16-tap PCF kernel, default 1.5 */
         } direct;
+        struct rb_job_bdpt {
+            uint32_t vpls;             /* VPLs per frame, default 21 */
+            uint32_t bundles;          /* global ray-bundles per frame, default 21 */
+            uint32_t rsm_size_px;      /* reflective shadow map, per cube face, default 256 */
+            uint32_t vpl_size_px;      /* VPL paraboloid shadow map, default 256 */
+            uint32_t bundle_size_px;   /* ray-bundle head image, default 256 */
+            uint32_t node_buffer_kib;  /* ray-bundle node buffer, default 20480 (20 MiB) */
+            uint32_t interleave;       /* n: n x n sub-images, default 4 */
+            uint32_t filter_radius_px; /* geometry-aware filter, default 4 */
+            float filter_depth;        /* relative depth difference that stops it, default 0.05 */
+            float filter_normal;       /* cosine between normals below which it stops, 0.9 */
+            float clamp;               /* bound on G(z1, z2) of two-bounce paths, times the
+                                        * scene's diagonal squared; 0: none; default 100 */
+            float vpl_bias;            /* VPL shadow-map depth bias, fraction of distance */
+            uint32_t view_triangles;   /* triangle budget of the small views' simplified mesh;
+                                        * 0: the full mesh */
+            enum rb_bdpt_strategies strategies;
+        } bdpt;
         struct {
             uint32_t spp;         /* samples per pixel, default 64 */
             uint32_t max_bounces; /* default 8; 0: direct light only */
