@@ -1,11 +1,14 @@
 // output: packs the frame's layers into one buffer for a single readback: the beauty (RGBA),
 // then the layers the job writes, in the order direct, indirect, albedo, normal, depth, motion
-// (with all of them, the RB_OUT_* layout). The direct integrator has no indirect light: zero. Every value written that is NaN or infinite is
-// counted in `nonfinite` (an integer atomic add, so the count does not depend on the order).
+// (with all of them, the RB_OUT_* layout). The direct integrator has no indirect light: zero;
+// bdpt's is textured and added here. Every value written that is NaN or infinite is counted
+// in `nonfinite` (an integer atomic add, so the count does not depend on the order).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "bindings_shared.h"
 #include "shared.h"
+#include "bdpt_shared.h"
+#include "brdf.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -18,6 +21,11 @@ layout(binding = RB_BIND_OUTPUT_POSITION, rgba32f) uniform readonly image2D gb_p
 layout(binding = RB_BIND_OUTPUT_MOTION, rgba32f) uniform readonly image2D gb_motion;
 layout(std430, binding = RB_BIND_OUTPUT_READBACK) writeonly buffer Out { float o[]; };
 layout(std430, binding = RB_BIND_OUTPUT_NONFINITE) buffer Nonfinite { uint nonfinite; };
+layout(binding = RB_BIND_OUTPUT_SPECULAR, rgba32f) uniform readonly image2D gb_specular;
+layout(binding = RB_BIND_OUTPUT_LIGHT + RB_BDPT_DIRECT_DIFFUSE, rgba32f) uniform readonly image2D direct_diffuse;
+layout(binding = RB_BIND_OUTPUT_LIGHT + RB_BDPT_DIRECT_SPECULAR, rgba32f) uniform readonly image2D direct_specular;
+layout(binding = RB_BIND_OUTPUT_LIGHT + RB_BDPT_INDIRECT_DIFFUSE, rgba32f) uniform readonly image2D indirect_diffuse;
+layout(binding = RB_BIND_OUTPUT_LIGHT + RB_BDPT_INDIRECT_SPECULAR, rgba32f) uniform readonly image2D indirect_specular;
 
 // The band of rows this dispatch writes: Out is bound from the band's first row, so indices
 // into it count from there (lib/passes/output.c splits frames larger than one binding may be).
@@ -29,6 +37,7 @@ layout(push_constant) uniform Band
     uint row_count;
     uint layer_mask;
     uint floats_per_pixel;
+    uint has_light; // bdpt's gathered light is bound
 } band;
 
 uint bad = 0u;
@@ -65,6 +74,15 @@ void main()
     vec3 a = hit ? imageLoad(gb_albedo, ip).rgb : vec3(0.0);
     vec3 n = hit ? imageLoad(gb_normal, ip).xyz : vec3(0.0);
     vec2 m = hit ? imageLoad(gb_motion, ip).xy : vec2(0.0);
+    vec3 ind = vec3(0.0);
+    if (band.has_light != 0u && hit) {
+        // Texturing (seed 000, Figure 3 b): the light was gathered without the maps.
+        float s = rb_spec_map(imageLoad(gb_specular, ip).rgb);
+        vec3 more = a * imageLoad(direct_diffuse, ip).rgb + s * imageLoad(direct_specular, ip).rgb;
+        ind = a * imageLoad(indirect_diffuse, ip).rgb + s * imageLoad(indirect_specular, ip).rgb;
+        d += more;
+        b.rgb += more + ind;
+    }
     uint base = (row * g.size.x + px.x) * band.floats_per_pixel;
     put(base + 0u, b.r);
     put(base + 1u, b.g);
@@ -72,7 +90,7 @@ void main()
     put(base + 3u, hit ? 1.0 : 0.0);
     uint at = base + 4u;
     layer(RB_LAYER_DIRECT, d, 3u, at);
-    layer(RB_LAYER_INDIRECT, vec3(0.0), 3u, at); // the direct integrator has none
+    layer(RB_LAYER_INDIRECT, ind, 3u, at); // the direct integrator has none
     layer(RB_LAYER_ALBEDO, a, 3u, at);
     layer(RB_LAYER_NORMAL, n, 3u, at);
     layer(RB_LAYER_DEPTH, vec3(hit ? pos.w : 0.0, 0.0, 0.0), 1u, at);

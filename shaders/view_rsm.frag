@@ -1,11 +1,12 @@
 // view, reflective-shadow-map output (Dachsbacher and Stamminger 2005; DESIGN.md "bdpt", rsm):
-// what the light sees at each texel -- world position, normal, and the flux the texel's patch
-// reflects. Materials as in gbuffer.frag: alpha cutoff, single-sided faces seen from behind are
+// what the light sees at each texel -- world position, normal, the flux the texel's patch
+// reflects, and its material as a bundle node stores it (for VPLs). Materials as in gbuffer.frag: alpha cutoff, single-sided faces seen from behind are
 // not there. Perspective and orthographic views.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "view_shared.h"
 #include "view.glsl"
+#include "material.glsl"
 
 layout(std430, binding = RB_VIEW_BIND_VIEWS) readonly buffer Views { rb_gpu_view views[]; };
 layout(std430, binding = RB_VIEW_BIND_MATERIALS) readonly buffer Materials
@@ -24,6 +25,7 @@ layout(location = 3) flat in uint i_material;
 layout(location = 0) out vec4 o_position; // world xyz; w = 1 (0 where nothing was drawn)
 layout(location = 1) out vec4 o_normal;   // unit normal on the view's side; w = face (+1, -1)
 layout(location = 2) out vec4 o_flux;     // reflected flux in W (rgb); w = the view depth
+layout(location = 3) out uvec2 o_material; // rb_material_pack: a bundle node's albedo and gloss
 
 // What one texel covers at the pixel centre: its solid angle in sr (perspective), or its area
 // across the beam in m^2 (orthographic). With rows R0, R1, R3 of the view's transform, clip
@@ -50,19 +52,9 @@ float texel_measure(rb_gpu_view v, uint kind)
 void main()
 {
     rb_gpu_material m = materials[i_material];
-    vec4 base = m.base_color;
-    if (m.textures.x >= 0)
-        base *= texture(srgb_textures, vec3(i_uv, float(m.textures.x)));
-    if (m.params.z > 0.0 && base.a < m.params.z)
+    rb_surface s = rb_material_eval(m, i_uv, srgb_textures, linear_textures);
+    if (rb_material_discards(m, s, gl_FrontFacing))
         discard;
-    bool double_sided = m.specular_color.w > 0.5;
-    if (!gl_FrontFacing && !double_sided)
-        discard;
-    float metallic = m.params.x;
-    if (m.textures.y >= 0)
-        metallic *= texture(linear_textures, vec3(i_uv, float(m.textures.y))).b;
-    vec3 c_diff = base.rgb * (1.0 - clamp(metallic, 0.0, 1.0));
-
     rb_gpu_view v = views[pc.index.x];
     uint kind = pc.index.z;
     vec3 n = normalize(i_normal);
@@ -70,5 +62,6 @@ void main()
         n = -n;
     o_position = vec4(i_pos, 1.0);
     o_normal = vec4(n, gl_FrontFacing ? 1.0 : -1.0);
-    o_flux = vec4(c_diff * pc.intensity.rgb * texel_measure(v, kind), rb_view_depth(v, kind, i_pos));
+    o_flux = vec4(s.c_diff * pc.intensity.rgb * texel_measure(v, kind), rb_view_depth(v, kind, i_pos));
+    o_material = rb_material_pack(s.c_diff, s.f0, s.roughness, s.emission);
 }

@@ -144,7 +144,7 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
         {.buffer = &frame->readback, .use = RB_GPU_COMPUTE_WRITE},
     };
     rb_integrator_pass_begin(it, cmd, "output", output, COUNT(output));
-    rb_pass_output_record(d->output, cmd, frame);
+    rb_pass_output_record(d->output, cmd, frame, NULL);
     rb_integrator_pass_end(it, cmd);
 }
 

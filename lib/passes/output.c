@@ -1,6 +1,8 @@
 /* output: packs beauty and the named layers into one host-visible buffer, so a frame is read
  * back with a single copy (the order is RB_OUT_* in shaders/common/shared.h), and counts the
- * NaN and infinite values it writes, so none reaches a file unnoticed. */
+ * NaN and infinite values it writes, so none reaches a file unnoticed. With bdpt's gathered
+ * light, it textures that light with the diffuse and gray specular maps and adds it (seed 000,
+ * B.1 "Output"). */
 #include "passes/passes_int.h"
 
 #include <stdlib.h>
@@ -18,6 +20,7 @@ struct rb_pass_output {
 struct band {
     uint32_t first_row, row_count;
     uint32_t layer_mask, floats_per_pixel;
+    uint32_t has_light, pad[3];
 };
 
 static const struct rb_pass_binding bindings[] = {
@@ -30,6 +33,11 @@ static const struct rb_pass_binding bindings[] = {
     RB_PASS_BIND(RB_BIND_OUTPUT_MOTION, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_OUTPUT_READBACK, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_OUTPUT_NONFINITE, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_OUTPUT_SPECULAR, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_OUTPUT_LIGHT + 0, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_OUTPUT_LIGHT + 1, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_OUTPUT_LIGHT + 2, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_OUTPUT_LIGHT + 3, STORAGE_IMAGE),
 };
 _Static_assert(COUNT(bindings) == RB_BIND_OUTPUT_COUNT, "output bindings");
 
@@ -66,7 +74,7 @@ enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output *
 }
 
 void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
-                           const struct rb_frame *frame)
+                           const struct rb_frame *frame, const struct rb_gpu_image *light)
 {
     /* The count starts from zero on the device, ordered before the shader's atomic adds. */
     vkCmdFillBuffer(cmd, p->nonfinite.buffer, 0, VK_WHOLE_SIZE, 0);
@@ -83,8 +91,12 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
         RB_BUG("readback rows of %llu bytes fit no storage binding", (unsigned long long)row_bytes);
     for (uint32_t first = 0; first < frame->height_px; first += band_rows) {
         uint32_t rows = frame->height_px - first;
-        struct band band = {first, rows < band_rows ? rows : band_rows, frame->layer_mask,
-                            frame->readback_floats};
+        struct band band = {first,
+                            rows < band_rows ? rows : band_rows,
+                            frame->layer_mask,
+                            frame->readback_floats,
+                            light != NULL,
+                            {0}};
         struct rb_pass_bindings b = {.pass = &p->pass};
         rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_GLOBALS, &frame->globals);
         rb_pass_bind_image(&b, RB_BIND_OUTPUT_BEAUTY, frame->beauty->view, VK_NULL_HANDLE);
@@ -100,6 +112,11 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
         rb_pass_bind_buffer_range(&b, RB_BIND_OUTPUT_READBACK, &frame->readback, first * row_bytes,
                                   band.row_count * row_bytes);
         rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_NONFINITE, &p->nonfinite);
+        rb_pass_bind_image(&b, RB_BIND_OUTPUT_SPECULAR, frame->gbuffer[RB_GB_SPECULAR].view,
+                           VK_NULL_HANDLE);
+        for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++) /* unread without light */
+            rb_pass_bind_image(&b, RB_BIND_OUTPUT_LIGHT + i,
+                               light ? light[i].view : frame->direct.view, VK_NULL_HANDLE);
         rb_pass_record_bindings(cmd, &b);
         vkCmdPushConstants(cmd, p->pass.layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0,
                            sizeof(band), &band);

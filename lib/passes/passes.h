@@ -8,6 +8,7 @@
 #include "scene/scene.h"
 #include "shared.h"
 #include "view_shared.h"
+#include "bdpt_shared.h"
 
 _Static_assert(sizeof(struct rb_gpu_globals) == 400, "globals layout");
 _Static_assert(sizeof(struct rb_gpu_vertex) == 64, "vertex layout");
@@ -17,7 +18,7 @@ _Static_assert(sizeof(struct rb_gpu_light) == 64, "light layout");
 _Static_assert(sizeof(struct rb_gpu_shadow_view) == 96, "shadow view layout");
 _Static_assert(sizeof(struct rb_gpu_view) == 96, "view layout");
 _Static_assert(sizeof(struct rb_gpu_view_push) == 48, "view push constants");
-_Static_assert(sizeof(struct rb_gpu_list_node) == 12, "list node layout");
+_Static_assert(sizeof(struct rb_gpu_list_node) == 20, "list node layout: seed 000's struct Node");
 _Static_assert(sizeof(struct rb_gpu_list_counter) == 16, "list counter layout");
 _Static_assert(sizeof(struct rb_scene_vertex) == RB_SRC_VERTEX_FLOATS * 4, "source vertex");
 _Static_assert(sizeof(struct rb_scene_morph_delta) == RB_MORPH_DELTA_FLOATS * 4, "morph delta");
@@ -112,12 +113,14 @@ enum rb_view_kind {
 enum rb_view_output {
     RB_VIEW_OUTPUT_INVALID = 0,
     RB_VIEW_OUTPUT_DEPTH, /* the view depth into an R32F layer (all kinds) */
-    RB_VIEW_OUTPUT_RSM,   /* position, normal, flux into RGBA32F layers (perspective, ortho) */
+    RB_VIEW_OUTPUT_RSM,   /* position, normal, flux, material (perspective, ortho) */
     RB_VIEW_OUTPUT_LIST,  /* every fragment into a per-pixel linked list (perspective, ortho) */
 };
 
-/* The formats of the reflective-shadow-map attachments: position, normal, flux. */
-extern const VkFormat rb_view_rsm_formats[3];
+/* The formats of the reflective-shadow-map attachments: position, normal, flux (RGBA32F) and
+ * material (RG32UI: the albedo and gloss words of a bundle node, rb_material_pack). */
+#define RB_VIEW_RSM_TARGETS 4
+extern const VkFormat rb_view_rsm_formats[RB_VIEW_RSM_TARGETS];
 
 /* The views a pass will record: each (kind, output) pair it is asked for gets a pipeline. */
 struct rb_view_variant {
@@ -154,12 +157,13 @@ struct rb_view_batch {
     enum rb_view_output output;
     const struct rb_gpu_buffer *views; /* struct rb_gpu_view */
     uint32_t first_view, first_layer, view_count;
-    const struct rb_gpu_image *targets[3]; /* depth: [0], R32F; rsm: position, normal, flux in
-                                            * rb_view_rsm_formats; arrays with layer views, in
-                                            * VK_IMAGE_LAYOUT_GENERAL */
-    const struct rb_gpu_image *depth;      /* depth, rsm: D32 scratch at least the targets' size,
-                                            * reused by every view of the batch */
-    const struct rb_view_list *list;       /* list: its heads have the layers */
+    const struct rb_gpu_image *targets[RB_VIEW_RSM_TARGETS]; /* depth: [0], R32F; rsm: in
+                                                              * rb_view_rsm_formats; arrays
+                                                              * with layer views, in
+                                                              * VK_IMAGE_LAYOUT_GENERAL */
+    const struct rb_gpu_image *depth; /* depth, rsm: D32 scratch at least the targets' size,
+                                       * reused by every view of the batch */
+    const struct rb_view_list *list;  /* list: its heads have the layers */
     float intensity[3]; /* rsm: radiant intensity in W/sr (perspective) or irradiance in W/m^2
                          * across the beam (orthographic) of the light the view looks from */
 };
@@ -225,9 +229,11 @@ struct rb_pass_output;
 enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output **out,
                                      struct rb_err *err);
 /* Packs beauty and layers into frame->readback, and counts the NaN and infinite floats among
- * them. */
+ * them. light: NULL, or bdpt's RB_BDPT_LIGHT_COUNT images of gathered light (bdpt_shared.h),
+ * which it textures with the diffuse and gray specular maps and adds: the direct part to the
+ * direct layer, the rest as the indirect layer, both to the beauty. */
 void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
-                           const struct rb_frame *frame);
+                           const struct rb_frame *frame, const struct rb_gpu_image *light);
 /* After the frame's submit has completed: how many floats the last record wrote to the readback
  * were NaN or infinite (0 for a clean frame). */
 uint32_t rb_pass_output_nonfinite_count(const struct rb_pass_output *p);

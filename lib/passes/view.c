@@ -36,10 +36,11 @@
 enum { PLAIN, CURVED, SHAPE_COUNT };
 #define OUTPUT_COUNT (RB_VIEW_OUTPUT_LIST + 1)
 
-const VkFormat rb_view_rsm_formats[3] = {
+const VkFormat rb_view_rsm_formats[RB_VIEW_RSM_TARGETS] = {
     VK_FORMAT_R32G32B32A32_SFLOAT,
     VK_FORMAT_R32G32B32A32_SFLOAT,
     VK_FORMAT_R32G32B32A32_SFLOAT,
+    VK_FORMAT_R32G32_UINT,
 };
 
 static const VkDescriptorType binding_types[RB_VIEW_BIND_COUNT] = {
@@ -148,7 +149,7 @@ static enum rb_status make_pipeline(struct rb_pass_view *p, int shape, enum rb_v
         d.frag = rb_spv_view_rsm_frag;
         d.frag_bytes = sizeof(rb_spv_view_rsm_frag);
         d.color_formats = rb_view_rsm_formats;
-        d.color_count = 3;
+        d.color_count = RB_VIEW_RSM_TARGETS;
         break;
     case RB_VIEW_OUTPUT_LIST:
         d.frag = rb_spv_view_list_frag;
@@ -284,13 +285,14 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
     struct writes w = {0};
     put_buffer(&w, RB_VIEW_BIND_VERTICES, &slot->vertices);
     put_buffer(&w, RB_VIEW_BIND_VIEWS, batch->views);
-    if (output == RB_VIEW_OUTPUT_RSM) {
+    if (output != RB_VIEW_OUTPUT_DEPTH) {
         put_buffer(&w, RB_VIEW_BIND_MATERIALS, &frame->materials);
         put_image(&w, RB_VIEW_BIND_SRGB_TEXTURES, frame->srgb_textures.view,
                   p->gpu->linear_sampler);
         put_image(&w, RB_VIEW_BIND_LINEAR_TEXTURES, frame->linear_textures.view,
                   p->gpu->linear_sampler);
-    } else if (output == RB_VIEW_OUTPUT_LIST) {
+    }
+    if (output == RB_VIEW_OUTPUT_LIST) {
         put_image(&w, RB_VIEW_BIND_HEADS, batch->list->heads.view, VK_NULL_HANDLE);
         put_buffer(&w, RB_VIEW_BIND_NODES, &batch->list->nodes);
         put_buffer(&w, RB_VIEW_BIND_COUNTER, &batch->list->counter);
@@ -305,11 +307,11 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
     VkViewport vp = {0, 0, (float)width, (float)height, 0.0f, 1.0f};
     VkRect2D area = {{0, 0}, {width, height}};
     uint32_t color_count = output == RB_VIEW_OUTPUT_DEPTH ? 1
-                           : output == RB_VIEW_OUTPUT_RSM ? 3
+                           : output == RB_VIEW_OUTPUT_RSM ? RB_VIEW_RSM_TARGETS
                                                           : 0;
     for (uint32_t i = 0; i < batch->view_count; i++) {
         uint32_t layer = batch->first_layer + i;
-        VkRenderingAttachmentInfo colors[3];
+        VkRenderingAttachmentInfo colors[RB_VIEW_RSM_TARGETS];
         for (uint32_t c = 0; c < color_count; c++)
             colors[c] = (VkRenderingAttachmentInfo){
                 .sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,

@@ -48,7 +48,66 @@
 #define RB_BIND_OUTPUT_MOTION 6
 #define RB_BIND_OUTPUT_READBACK 7  /* written: RB_OUT_FLOATS per pixel */
 #define RB_BIND_OUTPUT_NONFINITE 8 /* one uint, added to */
-#define RB_BIND_OUTPUT_COUNT 9
+#define RB_BIND_OUTPUT_SPECULAR 9  /* the G-buffer's F0: the gray specular map */
+#define RB_BIND_OUTPUT_LIGHT 10    /* RB_BDPT_LIGHT_COUNT images: bdpt's gathered light */
+#define RB_BIND_OUTPUT_COUNT 14
+
+/* bdpt_bounds.comp: the bounding box of the points the G-buffer sees */
+#define RB_BIND_BDPT_BOUNDS_POSITION 0
+#define RB_BIND_BDPT_BOUNDS_OUT 1 /* written: lo[3] and hi[3], order-preserving uint floats */
+#define RB_BIND_BDPT_BOUNDS_COUNT 2
+
+/* bdpt_generate.comp: VPLs, their paraboloid views and the bundles' orthographic views */
+#define RB_BIND_BDPT_GENERATE_BOUNDS 0
+#define RB_BIND_BDPT_GENERATE_SAMPLES 1
+#define RB_BIND_BDPT_GENERATE_LIGHTS 2
+#define RB_BIND_BDPT_GENERATE_BDPT_LIGHTS 3
+#define RB_BIND_BDPT_GENERATE_RSM_VIEWS 4
+#define RB_BIND_BDPT_GENERATE_RSM_POSITION 5
+#define RB_BIND_BDPT_GENERATE_RSM_NORMAL 6
+#define RB_BIND_BDPT_GENERATE_RSM_MATERIAL 7
+#define RB_BIND_BDPT_GENERATE_VPLS 8         /* written */
+#define RB_BIND_BDPT_GENERATE_VPL_VIEWS 9    /* written */
+#define RB_BIND_BDPT_GENERATE_BUNDLE_VIEWS 10 /* written */
+#define RB_BIND_BDPT_GENERATE_COUNT 11
+
+/* bdpt_split.comp: the G-buffer into n x n sub-images */
+#define RB_BIND_BDPT_SPLIT_GB_POSITION 0
+#define RB_BIND_BDPT_SPLIT_GB_NORMAL 1
+#define RB_BIND_BDPT_SPLIT_GB_SPECULAR 2
+#define RB_BIND_BDPT_SPLIT_GB_EMISSION 3
+#define RB_BIND_BDPT_SPLIT_GB_MOTION 4
+#define RB_BIND_BDPT_SPLIT_OUT 5 /* written: 4 images from here on */
+#define RB_BIND_BDPT_SPLIT_COUNT 9
+
+/* bdpt_connect.comp: one iteration's connections over one sub-image */
+#define RB_BIND_BDPT_CONNECT_GLOBALS 0
+#define RB_BIND_BDPT_CONNECT_SPLIT 1 /* 4 images */
+#define RB_BIND_BDPT_CONNECT_VPLS 5
+#define RB_BIND_BDPT_CONNECT_VPL_VIEWS 6
+#define RB_BIND_BDPT_CONNECT_VPL_MAPS 7
+#define RB_BIND_BDPT_CONNECT_BUNDLE_VIEWS 8
+#define RB_BIND_BDPT_CONNECT_HEADS 9
+#define RB_BIND_BDPT_CONNECT_NODES 10
+#define RB_BIND_BDPT_CONNECT_LIGHTS 11
+#define RB_BIND_BDPT_CONNECT_BDPT_LIGHTS 12
+#define RB_BIND_BDPT_CONNECT_SHADOW_VIEWS 13
+#define RB_BIND_BDPT_CONNECT_SHADOW_MAPS 14
+#define RB_BIND_BDPT_CONNECT_ENV_MAP 15
+#define RB_BIND_BDPT_CONNECT_LIGHT 16 /* read and written: RB_BDPT_LIGHT_COUNT images */
+#define RB_BIND_BDPT_CONNECT_COUNT 20
+
+/* bdpt_gather.comp: the sub-images' light back to the image */
+#define RB_BIND_BDPT_GATHER_IN 0  /* RB_BDPT_LIGHT_COUNT images */
+#define RB_BIND_BDPT_GATHER_OUT 4 /* written: RB_BDPT_LIGHT_COUNT images */
+#define RB_BIND_BDPT_GATHER_COUNT 8
+
+/* bdpt_filter.comp: the geometry-aware filter */
+#define RB_BIND_BDPT_FILTER_GB_POSITION 0
+#define RB_BIND_BDPT_FILTER_GB_NORMAL 1
+#define RB_BIND_BDPT_FILTER_IN 2  /* RB_BDPT_LIGHT_COUNT images */
+#define RB_BIND_BDPT_FILTER_OUT 6 /* written: RB_BDPT_LIGHT_COUNT images */
+#define RB_BIND_BDPT_FILTER_COUNT 10
 
 /* brdf_table.comp (tests/unit/test_brdf_parity.c) */
 #define RB_BIND_BRDF_TABLE_IN 0

@@ -6,6 +6,13 @@
 
 const float RB_PI = 3.14159265358979323846;
 
+// The gray specular map of a surface with Fresnel f0 (seed 000's "gray scale specular maps"): what
+// bdpt's specular light is divided by where it is gathered and multiplied by in the output.
+float rb_spec_map(vec3 f0)
+{
+    return max((f0.r + f0.g + f0.b) / 3.0, 1e-3);
+}
+
 // c_diff: diffuse albedo; f0, f90: Fresnel at normal and grazing incidence; alpha = roughness^2.
 vec3 rb_brdf(vec3 n, vec3 v, vec3 l, vec3 c_diff, vec3 f0, float f90, float roughness)
 {
@@ -30,6 +37,33 @@ vec3 rb_brdf(vec3 n, vec3 v, vec3 l, vec3 c_diff, vec3 f0, float f90, float roug
     float vis_den = ndl * sqrt(ndv * ndv * (1.0 - a2) + a2) + ndv * sqrt(ndl * ndl * (1.0 - a2) + a2);
     float V = vis_den > 0.0 ? 0.5 / vis_den : 0.0;
     return (vec3(1.0) - F) * c_diff / RB_PI + F * D * V;
+}
+
+// The two parts of rb_brdf for a camera vertex whose diffuse albedo is applied later (bdpt
+// gathers light untextured and textures it in the output pass): kd = (1 - F) / pi, the factor of
+// c_diff, and ks = F D V / spec_map, the specular part divided by the gray specular map.
+void rb_brdf_parts(vec3 n, vec3 v, vec3 l, vec3 f0, float f90, float roughness, out vec3 kd,
+                   out vec3 ks)
+{
+    kd = vec3(0.0);
+    ks = vec3(0.0);
+    float ndl = max(dot(n, l), 0.0);
+    float ndv = max(dot(n, v), 1e-4);
+    vec3 lv = l + v;
+    if (ndl <= 0.0 || !(dot(lv, lv) > 0.0))
+        return;
+    vec3 h = normalize(lv);
+    float ndh = max(dot(n, h), 0.0);
+    float vdh = clamp(dot(v, h), 0.0, 1.0);
+    float a = max(roughness * roughness, 1e-4);
+    float a2 = a * a;
+    vec3 F = f0 + (vec3(f90) - f0) * pow(1.0 - vdh, 5.0);
+    float d = ndh * ndh * (a2 - 1.0) + 1.0;
+    float D = a2 / (RB_PI * d * d);
+    float vis_den = ndl * sqrt(ndv * ndv * (1.0 - a2) + a2) + ndv * sqrt(ndl * ndl * (1.0 - a2) + a2);
+    float V = vis_den > 0.0 ? 0.5 / vis_den : 0.0;
+    kd = (vec3(1.0) - F) / RB_PI;
+    ks = F * D * V / rb_spec_map(f0);
 }
 
 #endif

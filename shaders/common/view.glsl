@@ -26,4 +26,58 @@ uint rb_view_polar_encode(vec3 n)
     return min(t, 65535u) | (min(f, 65535u) << 16);
 }
 
+// A unit vector back from rb_view_polar_encode.
+vec3 rb_view_polar_decode(uint w)
+{
+    const float pi = 3.14159265358979;
+    float theta = float(w & 0xffffu) / 65535.0 * pi;
+    float phi = (float(w >> 16) / 65535.0 - 0.5) * 2.0 * pi;
+    float s = sin(theta);
+    return vec3(s * cos(phi), s * sin(phi), cos(theta));
+}
+
+// A surface's material in the two words of a bundle node (seed 000, B.2) and of an RSM texel:
+// albedo = diffuse RGB and gray specular F0 (their mean), 8-bit unorm each; gloss = roughness
+// (8-bit unorm) in the low byte and emitted radiance in the 24 bits the seed reserves for it: a
+// shared exponent e (6 bits, 2^-31 .. 2^32) and three 6-bit mantissas, c = m / 63 * 2^e. F90 is
+// taken as 1 (glTF's, without KHR_materials_specular).
+uvec2 rb_material_pack(vec3 c_diff, vec3 f0, float roughness, vec3 emission)
+{
+    float spec = clamp((f0.r + f0.g + f0.b) / 3.0, 0.0, 1.0);
+    uint albedo = packUnorm4x8(vec4(clamp(c_diff, 0.0, 1.0), spec));
+    uint gloss = uint(round(clamp(roughness, 0.0, 1.0) * 255.0));
+    float m = max(emission.r, max(emission.g, emission.b));
+    if (m > 1e-9) {
+        int e = clamp(int(floor(log2(m))) + 1, -31, 32);
+        vec3 q = round(clamp(emission / exp2(float(e)), 0.0, 1.0) * 63.0);
+        uvec3 u = uvec3(q);
+        gloss |= (uint(e + 31) << 8) | (u.r << 14) | (u.g << 20) | (u.b << 26);
+    }
+    return uvec2(albedo, gloss);
+}
+
+struct rb_material {
+    vec3 c_diff;
+    float spec; // gray F0
+    float roughness;
+    vec3 emission;
+};
+
+rb_material rb_material_unpack(uvec2 w)
+{
+    rb_material m;
+    vec4 a = unpackUnorm4x8(w.x);
+    m.c_diff = a.rgb;
+    m.spec = a.a;
+    m.roughness = float(w.y & 0xffu) / 255.0;
+    uint hi = w.y >> 8;
+    if (hi == 0u) {
+        m.emission = vec3(0.0);
+    } else {
+        float s = exp2(float(int(hi & 63u) - 31)) / 63.0;
+        m.emission = vec3(float((hi >> 6) & 63u), float((hi >> 12) & 63u), float(hi >> 18)) * s;
+    }
+    return m;
+}
+
 #endif

@@ -22,9 +22,9 @@
 /* The view pass's one descriptor set (push descriptors): each output binds what it reads. */
 #define RB_VIEW_BIND_VERTICES 0        /* rb_gpu_vertex, world space (all) */
 #define RB_VIEW_BIND_VIEWS 1           /* rb_gpu_view (all) */
-#define RB_VIEW_BIND_MATERIALS 2       /* rb_gpu_material (rsm) */
-#define RB_VIEW_BIND_SRGB_TEXTURES 3   /* sampler2DArray (rsm) */
-#define RB_VIEW_BIND_LINEAR_TEXTURES 4 /* sampler2DArray (rsm) */
+#define RB_VIEW_BIND_MATERIALS 2       /* rb_gpu_material (rsm, list) */
+#define RB_VIEW_BIND_SRGB_TEXTURES 3   /* sampler2DArray (rsm, list) */
+#define RB_VIEW_BIND_LINEAR_TEXTURES 4 /* sampler2DArray (rsm, list) */
 #define RB_VIEW_BIND_HEADS 5           /* r32ui image2DArray, a layer per view (list) */
 #define RB_VIEW_BIND_NODES 6           /* rb_gpu_list_node (list) */
 #define RB_VIEW_BIND_COUNTER 7         /* rb_gpu_list_counter (list) */
@@ -58,13 +58,14 @@ struct rb_gpu_view_push {
     RB_VEC4(size);      /* target width, height in pixels, and their reciprocals */
 };
 
-/* A fragment of a linked-list view (seed 000, B.2). It grows to the seed's 20-byte node with
- * bdpt (albedo and glossiness go before next); readers go through these field names. */
+/* A fragment of a linked-list view: seed 000's struct Node (B.2), 20 bytes. */
 struct rb_gpu_list_node {
     RB_FLOAT(depth); /* the view depth, as the depth output stores it; its sign is the face:
                       * + front, - back */
     RB_UINT(normal); /* the interpolated vertex normal in polar angles, 16 bits each: theta in
                       * [0, pi] low, phi in [-pi, pi] high (rb_view_polar_encode) */
+    RB_UINT(albedo); /* diffuse RGB and gray specular F0, 8 bits each (rb_material_pack) */
+    RB_UINT(gloss);  /* roughness, 8 bits, low; emitted radiance in the 24 bits above it */
     RB_UINT(next);   /* the pixel's next node, RB_NONE at the end of its list */
 };
 

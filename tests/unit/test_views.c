@@ -640,9 +640,9 @@ static void test_rsm(void **state)
                         (float)(PI / 2), 1.0f, 0.01f, 10.0f);
     rb_view_orthographic(&gv[1], rb_v3(-0.3f, 0.4f, (float)height), rb_v3(0, 0, -1), rb_v3(0, 1, 0),
                          (float)half, (float)half, 10.0f);
-    struct rb_gpu_image targets[3] = {{0}}, depth = {0};
-    struct rb_gpu_buffer outs[3] = {{0}};
-    for (int i = 0; i < 3; i++) {
+    struct rb_gpu_image targets[RB_VIEW_RSM_TARGETS] = {{0}}, depth = {0};
+    struct rb_gpu_buffer outs[RB_VIEW_RSM_TARGETS] = {{0}};
+    for (int i = 0; i < RB_VIEW_RSM_TARGETS; i++) {
         make_image(g.gpu, SIZE, SIZE, 2, rb_view_rsm_formats[i],
                    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, true,
                    "rsm", &targets[i]);
@@ -673,12 +673,12 @@ static void test_rsm(void **state)
                 .first_view = (uint32_t)v,
                 .first_layer = (uint32_t)v,
                 .view_count = 1,
-                .targets = {&targets[0], &targets[1], &targets[2]},
+                .targets = {&targets[0], &targets[1], &targets[2], &targets[3]},
                 .depth = &depth,
                 .intensity = {e, e, e},
             });
     }
-    for (int i = 0; i < 3; i++)
+    for (int i = 0; i < RB_VIEW_RSM_TARGETS; i++)
         record_copy(g.gpu->cmd, &targets[i], &outs[i]);
     check_ok(rb_gpu_submit_wait(g.gpu, &err), &err);
     assert_int_equal(g.gpu->validation_messages, 0);
@@ -690,6 +690,8 @@ static void test_rsm(void **state)
      * whole map they add up to I albedo times 4 asin(sin 45 deg sin 45 deg) = 2 pi / 3 (within
      * the midpoint rule's error, 1e-4 at 64^2), and to E albedo times the beam's area. */
     const float *pos = outs[0].mapped, *nrm = outs[1].mapped, *flux = outs[2].mapped;
+    const uint32_t *mat = outs[3].mapped; /* RG32UI: albedo and gloss words */
+    uint32_t want_albedo = (uint32_t)lround(albedo * 255.0) * 0x010101u;
     double want_total[2] = {intensity * albedo * 2.0 * PI / 3.0,
                             irradiance * albedo * 4.0 * half * half};
     int bad = 0;
@@ -719,6 +721,10 @@ static void test_rsm(void **state)
                 bool ok = pos[k + 3] == 1.0f && nrm[k + 2] > 0.99999f && nrm[k + 3] == 1.0f &&
                           flux[k] == flux[k + 1] && flux[k] == flux[k + 2] && e < 1e-5 &&
                           fabs(flux[k + 3] - want_depth) < 1e-5;
+                /* The material as a bundle node holds it: diffuse RGB bytes (the specular byte
+                 * and roughness depend on the default material's F0), no emission. */
+                size_t km = (((size_t)v * SIZE + (size_t)y) * SIZE + (size_t)x) * 2;
+                ok = ok && (mat[km] & 0xffffffu) == want_albedo && (mat[km + 1] >> 8) == 0;
                 for (int c = 0; c < 3; c++)
                     ok = ok && fabs(pos[k + c] - want_pos[c]) < 1e-5;
                 if (!ok && bad++ < 8)
@@ -739,7 +745,7 @@ static void test_rsm(void **state)
 
     rb_pass_view_destroy(p);
     rb_gpu_image_release(g.gpu, &depth);
-    for (int i = 0; i < 3; i++) {
+    for (int i = 0; i < RB_VIEW_RSM_TARGETS; i++) {
         rb_gpu_buffer_release(g.gpu, &outs[i]);
         rb_gpu_image_release(g.gpu, &targets[i]);
     }

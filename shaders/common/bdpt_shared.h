@@ -1,0 +1,76 @@
+/* The bdpt integrator's buffers and push constants, shared by C (lib/passes/bdpt.c,
+ * lib/integrators/bdpt.c) and GLSL (shaders/bdpt_*.comp); C checks each size with
+ * _Static_assert in lib/passes/passes.h. DESIGN.md "bdpt" and BDPT.md say what they hold. */
+#ifndef RB_SHADERS_BDPT_SHARED_H
+#define RB_SHADERS_BDPT_SHARED_H
+
+#include "shared.h"
+
+/* One virtual point light: the first surface z a light's RSM sees along a sampled direction
+ * (BDPT.md "VPL"). Written by bdpt_generate.comp, read by bdpt_connect.comp. */
+struct rb_gpu_vpl {
+    RB_VEC4(position); /* xyz: z; w: 1 for a VPL, 0 where the direction found no surface */
+    RB_VEC4(normal);   /* xyz: z's unit normal, on the side the light arrives from; w: p_A^L(z),
+                        * the area density of z under the light's sampling, light choice
+                        * included (for MIS) */
+    RB_VEC4(power);    /* rgb: I(w) window(|y0 - z|) / (P(light) p(w)), or E A / P(light) for a
+                        * directional light: what z receives, divided by its pdf (W); w: unused */
+    RB_VEC4(from);     /* xyz: the light's position (point, spot) or the direction towards it
+                        * (directional); w: the light kind */
+    RB_UVEC4(material); /* x: albedo word, y: gloss word (rb_material_pack, the bundle node's);
+                         * z: the light's index; w: unused */
+};
+
+/* Per light, what sampling it needs beyond struct rb_gpu_light (host-written each frame). */
+struct rb_gpu_bdpt_light {
+    RB_VEC4(choice); /* x: P(light), the chance a VPL picks it (by power); y: the CDF through it;
+                      * z: the density of its sampled direction (1 / 4 pi, a point light; one
+                      * over the cone's solid angle, a spot) or of its beam point (1 / A,
+                      * directional); w: cos of the spot's outer angle */
+};
+
+/* The sampling table: scene-independent quasi-random numbers, one row per VPL and per bundle,
+ * generated once (lib/integrators/bdpt.c). */
+struct rb_gpu_bdpt_sample {
+    RB_VEC4(u); /* VPL: light choice, two for the direction or beam point; bundle: two for the
+                 * direction; w unused */
+};
+
+/* Push constants of bdpt_generate.comp. */
+struct rb_gpu_bdpt_generate_push {
+    RB_UVEC4(counts);  /* VPLs, bundles, light count, RSM size in texels */
+    RB_VEC4(scene);    /* xyz: the centre of the job's bounds; w: their radius */
+    RB_VEC4(sizes);    /* bundle grid size, VPL map size, unused, unused */
+};
+
+/* Push constants of bdpt_connect.comp: one iteration of the loop, over one sub-image. */
+struct rb_gpu_bdpt_connect_push {
+    RB_UVEC4(index);   /* iteration k, whether VPL k exists (0/1), whether bundle k does, the
+                        * strategies (RB_BDPT_MIS, _VPL, _BUNDLE) */
+    RB_UVEC4(region);  /* the sub-image's first texel in the split images (x, y), its size */
+    RB_VEC4(counts);   /* samples of the sub-image: VPLs n_a, bundles n_b, pairs n_c (as
+                        * floats); the G clamp (0: none) */
+    RB_VEC4(params);   /* VPL bias, VPL map size, bundle grid size, node capacity */
+};
+
+/* Push constants of the split, gather and filter passes. */
+struct rb_gpu_bdpt_image_push {
+    RB_UVEC4(split);  /* n, sub-image width, height, filter radius */
+    RB_VEC4(stops);   /* depth threshold, normal threshold, unused, unused */
+};
+
+/* Strategies, as enum rb_bdpt_strategies. */
+#define RB_BDPT_MIS 1
+#define RB_BDPT_VPL 2
+#define RB_BDPT_BUNDLE 3
+
+/* The light the bdpt passes gather, four images: diffuse and specular parts of what reaches
+ * the camera vertex after one scattering there from bundle directions (the environment and
+ * emitters: direct light) and after more (indirect light). */
+#define RB_BDPT_DIRECT_DIFFUSE 0
+#define RB_BDPT_DIRECT_SPECULAR 1
+#define RB_BDPT_INDIRECT_DIFFUSE 2
+#define RB_BDPT_INDIRECT_SPECULAR 3
+#define RB_BDPT_LIGHT_COUNT 4
+
+#endif
