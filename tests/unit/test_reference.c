@@ -1896,9 +1896,10 @@ static void test_convergence_sobol(void **state)
 }
 
 /* The path spaces are subsets with shared random numbers, so several of them must agree bit
- * for bit: emissive triangles light nothing in DIRECT and BDPT; BDPT's indirect light is FULL's
- * with two bounces when the environment and emitters are dark; BDPT's direct layer is DIRECT
- * plus the environment's light at x1, which is FULL's direct layer without emitters. */
+ * for bit. DIRECT: emissive triangles light nothing but themselves. BDPT counts emitters as it
+ * counts punctual lights (at x1, x2 and x3, by light sample and by BSDF sample, MIS'd), and the
+ * environment at x1 only: with a dark environment it is FULL with two bounces, and its direct
+ * layer is FULL's with no bounces whatever the environment. */
 static struct rb_scene *busy_scene_lamp(float emission)
 {
     struct rb_scene *s = busy_scene();
@@ -1911,23 +1912,43 @@ static struct rb_scene *busy_scene_lamp(float emission)
     return s;
 }
 
-static float *render_job(const struct rb_scene *s, const char *paths, int bounces, float env,
-                         struct rb_frame_result *r)
+/* BUSY_JOB's view at 24 x 20, frame 1, lit by lights (a YAML list) and a uniform sky of the
+ * given intensity. */
+static float *render_space(const struct rb_scene *s, const char *lights, const char *paths, int spp,
+                           int bounces, int rr_depth, float env, struct rb_frame_result *r)
 {
     struct rb_job *job = job_new(
         "resolution: [24, 20]\n"
         "frames: {start: 0, end: 1, rate: 24}\n"
         "camera: {fov_y_deg: 50, keys: [{t: 0, position: [0.3, 1.1, 2.6], look_at: [0, 0.4, 0]}]}\n"
-        "lights: [{type: point, position: [-0.8, 1.5, 0.8], intensity: 1.5}]\n"
+        "lights: %s\n"
+        "default_light: off\n"
         "environment: {color: [0.3, 0.4, 0.6], intensity: %g}\n"
-        "integrator: {name: reference, reference: {spp: 4, max_bounces: %d, rr_depth: 1, "
+        "integrator: {name: reference, reference: {spp: %d, max_bounces: %d, rr_depth: %d, "
         "paths: %s}}\n",
-        env, bounces, paths);
+        lights, env, spp, bounces, rr_depth, paths);
     struct rb_reference *ref = ref_new(job, s, 2);
     float *p = render(ref, 1, r);
     rb_reference_destroy(ref);
     rb_job_destroy(job);
     return p;
+}
+
+#define BUSY_POINT "[{type: point, position: [-0.8, 1.5, 0.8], intensity: 1.5}]"
+
+static float *render_job(const struct rb_scene *s, const char *paths, int bounces, float env,
+                         struct rb_frame_result *r)
+{
+    return render_space(s, BUSY_POINT, paths, 4, bounces, 1, env, r);
+}
+
+static double layer_sum(const float *px, size_t n, int layer)
+{
+    double sum = 0.0;
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++)
+            sum += px[i * RB_OUT_FLOATS + layer + c];
+    return sum;
 }
 
 static void test_path_spaces(void **state)
@@ -1936,43 +1957,83 @@ static void test_path_spaces(void **state)
     struct rb_scene *lit = busy_scene_lamp(1.0f), *dark = busy_scene_lamp(0.0f);
     struct rb_frame_result r;
     size_t n = 24 * 20;
+    /* DIRECT: the lamp lights nothing but itself; BDPT: it lights the scene, directly and after
+     * bounces. The lamp only adds (its light samples draw numbers no other sample uses), so
+     * every layer of every pixel is at least the dark lamp's, in floats too. */
     const char *spaces[2] = {"direct", "bdpt"};
     for (int k = 0; k < 2; k++) {
         float *a = render_job(lit, spaces[k], 5, 1.0f, &r),
               *b = render_job(dark, spaces[k], 5, 1.0f, &r);
-        uint32_t lamp = 0;
+        uint32_t lamp = 0, hits = 0, more_direct = 0, more_indirect = 0;
         for (size_t i = 0; i < n; i++) {
             const float *pa = a + i * RB_OUT_FLOATS, *pb = b + i * RB_OUT_FLOATS;
-            if (pa[RB_OUT_ALBEDO + 1] > 0.85f) { /* the lamp itself: only its emission differs */
+            if (pa[RB_OUT_ALBEDO + 1] > 0.85f) { /* the lamp itself: its emission */
                 lamp++;
                 assert_true(pa[RB_OUT_DIRECT] > pb[RB_OUT_DIRECT] + 1.0f);
                 continue;
             }
-            if (memcmp(pa, pb, RB_OUT_FLOATS * sizeof(float)))
-                fail_msg("%s: pixel %zu is lit by the emissive quad", spaces[k], i);
+            hits += pa[RB_OUT_BEAUTY + 3] > 0.0f;
+            if (k == 0) {
+                if (memcmp(pa, pb, RB_OUT_FLOATS * sizeof(float)))
+                    fail_msg("direct: pixel %zu is lit by the emissive quad", i);
+                continue;
+            }
+            for (int c = 0; c < 3; c++)
+                if (!(pa[RB_OUT_DIRECT + c] >= pb[RB_OUT_DIRECT + c] &&
+                      pa[RB_OUT_INDIRECT + c] >= pb[RB_OUT_INDIRECT + c]))
+                    fail_msg("bdpt: pixel %zu is darker with the lamp lit", i);
+            more_direct += pa[RB_OUT_DIRECT] > pb[RB_OUT_DIRECT];
+            more_indirect += pa[RB_OUT_INDIRECT] > pb[RB_OUT_INDIRECT];
         }
-        assert_true(lamp > 0);
+        assert_true(lamp > 0 && hits > n / 2);
+        if (k == 1) {
+            print_message("# bdpt: the lamp adds direct light to %u and indirect to %u of %u "
+                          "pixels; indirect %.4g -> %.4g, direct %.4g -> %.4g\n",
+                          more_direct, more_indirect, hits, layer_sum(b, n, RB_OUT_INDIRECT),
+                          layer_sum(a, n, RB_OUT_INDIRECT), layer_sum(b, n, RB_OUT_DIRECT),
+                          layer_sum(a, n, RB_OUT_DIRECT));
+            if (!(more_direct > hits / 2 && more_indirect > hits / 4))
+                fail_msg("bdpt: the lamp lights %u (direct), %u (indirect) of %u pixels",
+                         more_direct, more_indirect, hits);
+            assert_true(layer_sum(a, n, RB_OUT_DIRECT) > 1.1 * layer_sum(b, n, RB_OUT_DIRECT));
+            assert_true(layer_sum(a, n, RB_OUT_INDIRECT) > 1.1 * layer_sum(b, n, RB_OUT_INDIRECT));
+        }
         free(a);
         free(b);
     }
-    /* FULL, two bounces, dark environment and lamp == BDPT (which caps bounces at two) */
-    float *full = render_job(dark, "full", 2, 0.0f, &r),
-          *bdpt = render_job(dark, "bdpt", 5, 0.0f, &r);
-    assert_memory_equal(full, bdpt, n * RB_OUT_FLOATS * sizeof(float));
-    /* and with more bounces FULL finds more light */
-    float *full5 = render_job(dark, "full", 5, 0.0f, &r);
-    double sum2 = 0.0, sum5 = 0.0;
-    for (size_t i = 0; i < n; i++) {
-        sum2 += full[i * RB_OUT_FLOATS + RB_OUT_INDIRECT];
-        sum5 += full5[i * RB_OUT_FLOATS + RB_OUT_INDIRECT];
+    /* FULL, two bounces, dark environment == BDPT (which caps bounces at two), with the point
+     * light and the lamp, or the point light alone, Russian roulette included */
+    struct rb_scene *both[2] = {lit, dark};
+    for (int k = 0; k < 2; k++) {
+        float *full = render_job(both[k], "full", 2, 0.0f, &r),
+              *bdpt = render_job(both[k], "bdpt", 5, 0.0f, &r);
+        assert_memory_equal(full, bdpt, n * RB_OUT_FLOATS * sizeof(float));
+        free(full);
+        free(bdpt);
     }
-    assert_true(sum5 > sum2 * 1.02);
-    free(full5);
+    /* The lamp alone, no roulette: the same, and BDPT's paths end there; FULL finds more light
+     * with a third bounce, so the BSDF sample from x3 counts the emitter it hits and goes no
+     * further */
+    float *full = render_space(lit, "[]", "full", 4, 2, 2, 0.0f, &r),
+          *bdpt = render_space(lit, "[]", "bdpt", 4, 5, 2, 0.0f, &r),
+          *full3 = render_space(lit, "[]", "full", 4, 3, 3, 0.0f, &r);
+    assert_memory_equal(full, bdpt, n * RB_OUT_FLOATS * sizeof(float));
+    double ind2 = layer_sum(bdpt, n, RB_OUT_INDIRECT), ind3 = layer_sum(full3, n, RB_OUT_INDIRECT);
+    print_message("# lamp alone: indirect %.4g (bdpt), %.4g (full, 3 bounces), direct %.4g\n", ind2,
+                  ind3, layer_sum(bdpt, n, RB_OUT_DIRECT));
+    assert_true(ind2 > 0.0 && ind3 > ind2 * 1.02);
+    free(full3);
     free(full);
     free(bdpt);
-    /* BDPT's direct layer == DIRECT (dark sky) and == FULL with no bounces (no lamp) */
-    float *direct = render_job(lit, "direct", 5, 0.0f, &r);
-    bdpt = render_job(lit, "bdpt", 5, 0.0f, &r);
+    /* and with more bounces FULL finds more light */
+    full = render_job(lit, "full", 2, 0.0f, &r);
+    float *full5 = render_job(lit, "full", 5, 0.0f, &r);
+    assert_true(layer_sum(full5, n, RB_OUT_INDIRECT) > layer_sum(full, n, RB_OUT_INDIRECT) * 1.02);
+    free(full5);
+    free(full);
+    /* BDPT's direct layer == DIRECT (dark sky and lamp), with the same AOVs */
+    float *direct = render_job(dark, "direct", 5, 0.0f, &r);
+    bdpt = render_job(dark, "bdpt", 5, 0.0f, &r);
     for (size_t i = 0; i < n; i++) {
         const float *pd = direct + i * RB_OUT_FLOATS, *pb = bdpt + i * RB_OUT_FLOATS;
         assert_memory_equal(pd + RB_OUT_DIRECT, pb + RB_OUT_DIRECT, 3 * sizeof(float));
@@ -1981,8 +2042,9 @@ static void test_path_spaces(void **state)
     }
     free(direct);
     free(bdpt);
-    bdpt = render_job(dark, "bdpt", 3, 1.0f, &r);
-    full = render_job(dark, "full", 0, 1.0f, &r);
+    /* and == FULL with no bounces: lamp, point light and sky at x1 */
+    bdpt = render_job(lit, "bdpt", 3, 1.0f, &r);
+    full = render_job(lit, "full", 0, 1.0f, &r);
     for (size_t i = 0; i < n; i++)
         assert_memory_equal(bdpt + i * RB_OUT_FLOATS + RB_OUT_DIRECT,
                             full + i * RB_OUT_FLOATS + RB_OUT_DIRECT, 3 * sizeof(float));
