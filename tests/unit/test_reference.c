@@ -6,8 +6,9 @@
  * culling for camera rays only, alpha masks, textures, normal maps, KHR_materials_specular,
  * back faces); area lights against Lambert's polygon formula (a ceiling beside its light
  * panel); skins, morph targets and motion vectors; the box pixel filter; the path spaces
- * against each other; determinism across thread counts and runs; convergence (1/sqrt(spp) with
- * hashed numbers, faster with the Sobol sampler); passes and callbacks. */
+ * against each other, BDPT's emitters against a point light and in the Cornell box; determinism
+ * across thread counts and runs; convergence (1/sqrt(spp) with hashed numbers, faster with the
+ * Sobol sampler); passes and callbacks. */
 #include "reference/reference.h"
 
 #include <math.h>
@@ -21,6 +22,7 @@
 #include <cmocka.h>
 
 #include "shared.h"
+#include "testutil.h"
 
 #define NONE RB_SCENE_NONE
 #define PI_D 3.14159265358979323846
@@ -2054,6 +2056,128 @@ static void test_path_spaces(void **state)
     rb_scene_destroy(lit);
 }
 
+/* Emitters light as punctual lights do in BDPT's path space. A convex emitter of radiance L
+ * and surface area A is, seen from outside, a light of intensity L A / 4 on average over
+ * directions (Cauchy: a convex body's mean projected area is a quarter of its surface; L pi r^2
+ * for a true sphere, whose irradiance outside it is a point's at its centre). So a small
+ * emissive sphere and a point light of that intensity at its centre light the busy scene
+ * alike, directly and after one and two bounces, up to noise, facets and the sphere's shadow;
+ * a path space that gave emitters a bounce more or fewer than punctual lights would not. At
+ * 256 samples, since the metal sphere's BSDF samples that hit the small emitter are rare and
+ * bright; the facets and the shadow leave about 1.5%. */
+static void test_bdpt_emitter_as_point(void **state)
+{
+    (void)state;
+    struct rb_scene *sphere = busy_scene_lamp(0.0f), *point = busy_scene_lamp(0.0f);
+    uint32_t mat = add_material(sphere, lamp(1.0f));
+    uint32_t node = add_sphere(sphere, rb_v3(-0.8f, 1.5f, 0.8f), 0.05f, 16, 16, mat);
+    const struct rb_scene_primitive *prim =
+        &sphere->primitives[sphere->meshes[sphere->nodes[node].mesh].first_primitive];
+    double area = 0.0;
+    for (uint32_t i = 0; i < prim->index_count; i += 3) {
+        const uint32_t *t = &sphere->indices[prim->first_index + i];
+        const float *p0 = sphere->vertices[prim->first_vertex + t[0]].position;
+        const float *p1 = sphere->vertices[prim->first_vertex + t[1]].position;
+        const float *p2 = sphere->vertices[prim->first_vertex + t[2]].position;
+        struct rb_vec3 e1 = rb_v3(p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]);
+        struct rb_vec3 e2 = rb_v3(p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]);
+        area += 0.5 * rb_v3_length(rb_v3_cross(e1, e2));
+    }
+    float le = (float)(1.5 / (area / 4.0)); /* BUSY_POINT's intensity, 1.5 */
+    for (int c = 0; c < 3; c++)
+        sphere->materials[mat].emissive[c] = le;
+    struct rb_frame_result r;
+    size_t n = 24 * 20;
+    float *a = render_space(sphere, "[]", "bdpt", 256, 5, 2, 0.0f, &r),
+          *b = render_space(point, BUSY_POINT, "bdpt", 256, 5, 2, 0.0f, &r);
+    double sum[2][2] = {{0}};
+    uint32_t used = 0;
+    for (size_t i = 0; i < n; i++) {
+        const float *pa = a + i * RB_OUT_FLOATS, *pb = b + i * RB_OUT_FLOATS;
+        if (!(pa[RB_OUT_BEAUTY + 3] > 0.0f) ||
+            memcmp(pa + RB_OUT_ALBEDO, pb + RB_OUT_ALBEDO, 3 * sizeof(float)))
+            continue; /* the sky, or the sphere where the point light has nothing */
+        used++;
+        for (int c = 0; c < 3; c++) {
+            sum[0][0] += pa[RB_OUT_DIRECT + c];
+            sum[0][1] += pa[RB_OUT_INDIRECT + c];
+            sum[1][0] += pb[RB_OUT_DIRECT + c];
+            sum[1][1] += pb[RB_OUT_INDIRECT + c];
+        }
+    }
+    double rd = sum[0][0] / sum[1][0], ri = sum[0][1] / sum[1][1];
+    print_message("# emissive sphere / point light over %u pixels: direct %.4f, indirect %.4f\n",
+                  used, rd, ri);
+    assert_true(used > n / 2 && sum[1][1] > 0.0);
+    if (!(fabs(rd - 1.0) < 0.03 && fabs(ri - 1.0) < 0.04))
+        fail_msg("emissive sphere / point light: direct %g, indirect %g, not 1", rd, ri);
+    free(b);
+    free(a);
+    rb_scene_destroy(point);
+    rb_scene_destroy(sphere);
+}
+
+/* The area-lit Cornell box ($RB_SCENES, skipped without it), lit by its emissive quad alone:
+ * DIRECT sees the quad and nothing else; BDPT lights the room directly and after bounces, as
+ * FULL with two bounces does bit for bit, and FULL finds more with more bounces. */
+static void test_bdpt_cornell_box(void **state)
+{
+    (void)state;
+    char path[1024];
+    if (rb_test_scene(path, sizeof(path), "cornell-box/CornellBox.glb"))
+        skip(); /* a checkout without the external sample scenes */
+    struct rb_scene *s = NULL;
+    struct rb_err err = RB_ERR_INIT;
+    if (rb_scene_load(path, 0, &s, &err))
+        fail_msg("loading '%s' failed: %s", path, err.msg);
+    const char *spaces[4] = {"direct", "bdpt", "full", "full"};
+    const int bounces[4] = {8, 8, 2, 8};
+    float *px[4];
+    struct rb_frame_result r;
+    for (int k = 0; k < 4; k++) {
+        struct rb_job *job = job_new(
+            "resolution: [16, 16]\n"
+            "frames: {start: 0, end: 0, rate: 24}\n"
+            "default_light: off\n"
+            "integrator: {name: reference, reference: {spp: 4, max_bounces: %d, rr_depth: 2, "
+            "paths: %s}}\n",
+            bounces[k], spaces[k]);
+        struct rb_reference *ref = ref_new(job, s, 2);
+        px[k] = render(ref, 0, &r);
+        rb_reference_destroy(ref);
+        rb_job_destroy(job);
+    }
+    size_t n = 16 * 16;
+    uint32_t quad = 0, room = 0;
+    double sum[3] = {0}; /* BDPT's beauty, direct, indirect over the room */
+    for (size_t i = 0; i < n; i++) {
+        const float *pd = px[0] + i * RB_OUT_FLOATS, *pb = px[1] + i * RB_OUT_FLOATS;
+        if (!(pd[RB_OUT_BEAUTY + 3] > 0.0f))
+            continue;
+        if (pd[RB_OUT_BEAUTY] > 0.0f) { /* the quad's emission, the same in both */
+            quad++;
+            assert_true(pb[RB_OUT_DIRECT] >= pd[RB_OUT_DIRECT]);
+            continue;
+        }
+        room++;
+        for (int c = 0; c < 3; c++) {
+            sum[0] += pb[RB_OUT_BEAUTY + c] / 3.0;
+            sum[1] += pb[RB_OUT_DIRECT + c] / 3.0;
+            sum[2] += pb[RB_OUT_INDIRECT + c] / 3.0;
+        }
+    }
+    print_message("# cornell box, bdpt: %u room pixels, mean beauty %.4g = direct %.4g + indirect "
+                  "%.4g; %u quad pixels\n",
+                  room, sum[0] / room, sum[1] / room, sum[2] / room, quad);
+    assert_true(room > n / 2 && quad > 0);
+    assert_true(sum[0] / room > 0.05 && sum[2] > 0.1 * sum[1]);
+    assert_memory_equal(px[1], px[2], n * RB_OUT_FLOATS * sizeof(float));
+    assert_true(layer_sum(px[3], n, RB_OUT_INDIRECT) > 1.02 * layer_sum(px[2], n, RB_OUT_INDIRECT));
+    for (int k = 0; k < 4; k++)
+        free(px[k]);
+    rb_scene_destroy(s);
+}
+
 struct pass_log {
     uint32_t done[16], total, calls, stop_after;
 };
@@ -2165,6 +2289,8 @@ int main(void)
         cmocka_unit_test(test_motion_and_morph),
         cmocka_unit_test(test_pixel_filter),
         cmocka_unit_test(test_path_spaces),
+        cmocka_unit_test(test_bdpt_emitter_as_point),
+        cmocka_unit_test(test_bdpt_cornell_box),
         cmocka_unit_test(test_determinism),
         cmocka_unit_test(test_convergence),
         cmocka_unit_test(test_convergence_sobol),
