@@ -2124,8 +2124,10 @@ static void test_bdpt_cornell_box(void **state)
 {
     (void)state;
     char path[1024];
-    if (rb_test_scene(path, sizeof(path), "cornell-box/CornellBox.glb"))
+    if (rb_test_scene(path, sizeof(path), "cornell-box/CornellBox.glb")) {
+        print_message("# cornell box: '%s' is absent ($RB_SCENES)\n", path);
         skip(); /* a checkout without the external sample scenes */
+    }
     struct rb_scene *s = NULL;
     struct rb_err err = RB_ERR_INIT;
     if (rb_scene_load(path, 0, &s, &err))
