@@ -28,8 +28,9 @@ enum rb_path_space {
     RB_PATHS_FULL,        /* every path up to max_bounces */
     RB_PATHS_DIRECT,      /* what the direct integrator computes: punctual lights (shadowed),
                            * emission, and the environment seen directly */
-    RB_PATHS_BDPT,        /* what bdpt computes: direct light, up to two indirect bounces from
-                           * punctual lights, the environment's direct light */
+    RB_PATHS_BDPT,        /* what bdpt computes: direct light and up to two indirect bounces
+                           * from punctual lights and emissive triangles, the environment's
+                           * direct light */
 };
 
 /* Which bdpt strategies count (BDPT.md): all of them weighted by MIS, or one side alone. */

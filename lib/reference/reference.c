@@ -25,9 +25,12 @@
  * - Path spaces: FULL counts every path up to max_bounces bounces past the first hit. DIRECT is
  *   the direct integrator's: emission at x1, punctual lights at x1 (exact visibility), the
  *   environment on camera misses; it draws no random numbers but box's pixel positions, so
- *   under center its samples after the first are copies. BDPT is BDPT.md's: DIRECT plus the
- *   environment's light at x1 (light and BSDF samples, MIS) plus punctual light after one and
- *   two bounces (at x2, x3); emissive triangles light nothing but themselves.
+ *   under center its samples after the first are copies. BDPT is BDPT.md's: emission at x1;
+ *   punctual lights and emissive triangles at x1, x2 and x3 (direct light and one and two
+ *   bounces: light -> x3 -> x2 -> x1 at the longest; fewer when max_bounces < 2), emitters by
+ *   light sample and by each vertex's BSDF sample (MIS, as in FULL; the BSDF sample from x3
+ *   counts an emitter it hits and goes no further); the environment at x1 only (light and BSDF
+ *   samples, MIS) and on camera misses. With a black environment it is FULL with two bounces.
  * - Layers: direct = emission at x1 + light reaching x1 after exactly one scattering + the
  *   environment on camera misses; indirect = the rest; beauty = direct + indirect, alpha 1 on a
  *   hit and 0 on a miss (averaged under box). AOVs from the first hit: albedo (c_diff), shading

@@ -239,9 +239,12 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
     for (int i = 0; i < 3; i++)
         direct[i] += s.emission[i];
 
-    /* How many bounces past x1 the path may take, and what each vertex may gather. */
+    /* How many bounces past x1 the path may take, and what each vertex may gather. Emitters
+     * light as punctual lights do, at every vertex up to the last one, by light sample and by
+     * that vertex's BSDF sample: both make a path with the same scatterings (emitter -> x_k ->
+     * ... -> x1), so the BSDF sample from the last vertex finds emitters but goes no further. */
     uint32_t bounces = w->max_bounces;
-    bool has_area = w->paths == RB_PATHS_FULL && w->emitter_count > 0;
+    bool has_area = w->paths != RB_PATHS_DIRECT && w->emitter_count > 0;
     bool has_env = w->paths != RB_PATHS_DIRECT && !w->env->is_black;
     if (w->paths == RB_PATHS_DIRECT)
         bounces = 0;

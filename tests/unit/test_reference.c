@@ -6,8 +6,9 @@
  * culling for camera rays only, alpha masks, textures, normal maps, KHR_materials_specular,
  * back faces); area lights against Lambert's polygon formula (a ceiling beside its light
  * panel); skins, morph targets and motion vectors; the box pixel filter; the path spaces
- * against each other; determinism across thread counts and runs; convergence (1/sqrt(spp) with
- * hashed numbers, faster with the Sobol sampler); passes and callbacks. */
+ * against each other, BDPT's emitters against a point light and in the Cornell box; determinism
+ * across thread counts and runs; convergence (1/sqrt(spp) with hashed numbers, faster with the
+ * Sobol sampler); passes and callbacks. */
 #include "reference/reference.h"
 
 #include <math.h>
@@ -21,6 +22,7 @@
 #include <cmocka.h>
 
 #include "shared.h"
+#include "testutil.h"
 
 #define NONE RB_SCENE_NONE
 #define PI_D 3.14159265358979323846
@@ -1896,9 +1898,10 @@ static void test_convergence_sobol(void **state)
 }
 
 /* The path spaces are subsets with shared random numbers, so several of them must agree bit
- * for bit: emissive triangles light nothing in DIRECT and BDPT; BDPT's indirect light is FULL's
- * with two bounces when the environment and emitters are dark; BDPT's direct layer is DIRECT
- * plus the environment's light at x1, which is FULL's direct layer without emitters. */
+ * for bit. DIRECT: emissive triangles light nothing but themselves. BDPT counts emitters as it
+ * counts punctual lights (at x1, x2 and x3, by light sample and by BSDF sample, MIS'd), and the
+ * environment at x1 only: with a dark environment it is FULL with two bounces, and its direct
+ * layer is FULL's with no bounces whatever the environment. */
 static struct rb_scene *busy_scene_lamp(float emission)
 {
     struct rb_scene *s = busy_scene();
@@ -1911,23 +1914,43 @@ static struct rb_scene *busy_scene_lamp(float emission)
     return s;
 }
 
-static float *render_job(const struct rb_scene *s, const char *paths, int bounces, float env,
-                         struct rb_frame_result *r)
+/* BUSY_JOB's view at 24 x 20, frame 1, lit by lights (a YAML list) and a uniform sky of the
+ * given intensity. */
+static float *render_space(const struct rb_scene *s, const char *lights, const char *paths, int spp,
+                           int bounces, int rr_depth, float env, struct rb_frame_result *r)
 {
     struct rb_job *job = job_new(
         "resolution: [24, 20]\n"
         "frames: {start: 0, end: 1, rate: 24}\n"
         "camera: {fov_y_deg: 50, keys: [{t: 0, position: [0.3, 1.1, 2.6], look_at: [0, 0.4, 0]}]}\n"
-        "lights: [{type: point, position: [-0.8, 1.5, 0.8], intensity: 1.5}]\n"
+        "lights: %s\n"
+        "default_light: off\n"
         "environment: {color: [0.3, 0.4, 0.6], intensity: %g}\n"
-        "integrator: {name: reference, reference: {spp: 4, max_bounces: %d, rr_depth: 1, "
+        "integrator: {name: reference, reference: {spp: %d, max_bounces: %d, rr_depth: %d, "
         "paths: %s}}\n",
-        env, bounces, paths);
+        lights, env, spp, bounces, rr_depth, paths);
     struct rb_reference *ref = ref_new(job, s, 2);
     float *p = render(ref, 1, r);
     rb_reference_destroy(ref);
     rb_job_destroy(job);
     return p;
+}
+
+#define BUSY_POINT "[{type: point, position: [-0.8, 1.5, 0.8], intensity: 1.5}]"
+
+static float *render_job(const struct rb_scene *s, const char *paths, int bounces, float env,
+                         struct rb_frame_result *r)
+{
+    return render_space(s, BUSY_POINT, paths, 4, bounces, 1, env, r);
+}
+
+static double layer_sum(const float *px, size_t n, int layer)
+{
+    double sum = 0.0;
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++)
+            sum += px[i * RB_OUT_FLOATS + layer + c];
+    return sum;
 }
 
 static void test_path_spaces(void **state)
@@ -1936,43 +1959,83 @@ static void test_path_spaces(void **state)
     struct rb_scene *lit = busy_scene_lamp(1.0f), *dark = busy_scene_lamp(0.0f);
     struct rb_frame_result r;
     size_t n = 24 * 20;
+    /* DIRECT: the lamp lights nothing but itself; BDPT: it lights the scene, directly and after
+     * bounces. The lamp only adds (its light samples draw numbers no other sample uses), so
+     * every layer of every pixel is at least the dark lamp's, in floats too. */
     const char *spaces[2] = {"direct", "bdpt"};
     for (int k = 0; k < 2; k++) {
         float *a = render_job(lit, spaces[k], 5, 1.0f, &r),
               *b = render_job(dark, spaces[k], 5, 1.0f, &r);
-        uint32_t lamp = 0;
+        uint32_t lamp = 0, hits = 0, more_direct = 0, more_indirect = 0;
         for (size_t i = 0; i < n; i++) {
             const float *pa = a + i * RB_OUT_FLOATS, *pb = b + i * RB_OUT_FLOATS;
-            if (pa[RB_OUT_ALBEDO + 1] > 0.85f) { /* the lamp itself: only its emission differs */
+            if (pa[RB_OUT_ALBEDO + 1] > 0.85f) { /* the lamp itself: its emission */
                 lamp++;
                 assert_true(pa[RB_OUT_DIRECT] > pb[RB_OUT_DIRECT] + 1.0f);
                 continue;
             }
-            if (memcmp(pa, pb, RB_OUT_FLOATS * sizeof(float)))
-                fail_msg("%s: pixel %zu is lit by the emissive quad", spaces[k], i);
+            hits += pa[RB_OUT_BEAUTY + 3] > 0.0f;
+            if (k == 0) {
+                if (memcmp(pa, pb, RB_OUT_FLOATS * sizeof(float)))
+                    fail_msg("direct: pixel %zu is lit by the emissive quad", i);
+                continue;
+            }
+            for (int c = 0; c < 3; c++)
+                if (!(pa[RB_OUT_DIRECT + c] >= pb[RB_OUT_DIRECT + c] &&
+                      pa[RB_OUT_INDIRECT + c] >= pb[RB_OUT_INDIRECT + c]))
+                    fail_msg("bdpt: pixel %zu is darker with the lamp lit", i);
+            more_direct += pa[RB_OUT_DIRECT] > pb[RB_OUT_DIRECT];
+            more_indirect += pa[RB_OUT_INDIRECT] > pb[RB_OUT_INDIRECT];
         }
-        assert_true(lamp > 0);
+        assert_true(lamp > 0 && hits > n / 2);
+        if (k == 1) {
+            print_message("# bdpt: the lamp adds direct light to %u and indirect to %u of %u "
+                          "pixels; indirect %.4g -> %.4g, direct %.4g -> %.4g\n",
+                          more_direct, more_indirect, hits, layer_sum(b, n, RB_OUT_INDIRECT),
+                          layer_sum(a, n, RB_OUT_INDIRECT), layer_sum(b, n, RB_OUT_DIRECT),
+                          layer_sum(a, n, RB_OUT_DIRECT));
+            if (!(more_direct > hits / 2 && more_indirect > hits / 4))
+                fail_msg("bdpt: the lamp lights %u (direct), %u (indirect) of %u pixels",
+                         more_direct, more_indirect, hits);
+            assert_true(layer_sum(a, n, RB_OUT_DIRECT) > 1.1 * layer_sum(b, n, RB_OUT_DIRECT));
+            assert_true(layer_sum(a, n, RB_OUT_INDIRECT) > 1.1 * layer_sum(b, n, RB_OUT_INDIRECT));
+        }
         free(a);
         free(b);
     }
-    /* FULL, two bounces, dark environment and lamp == BDPT (which caps bounces at two) */
-    float *full = render_job(dark, "full", 2, 0.0f, &r),
-          *bdpt = render_job(dark, "bdpt", 5, 0.0f, &r);
-    assert_memory_equal(full, bdpt, n * RB_OUT_FLOATS * sizeof(float));
-    /* and with more bounces FULL finds more light */
-    float *full5 = render_job(dark, "full", 5, 0.0f, &r);
-    double sum2 = 0.0, sum5 = 0.0;
-    for (size_t i = 0; i < n; i++) {
-        sum2 += full[i * RB_OUT_FLOATS + RB_OUT_INDIRECT];
-        sum5 += full5[i * RB_OUT_FLOATS + RB_OUT_INDIRECT];
+    /* FULL, two bounces, dark environment == BDPT (which caps bounces at two), with the point
+     * light and the lamp, or the point light alone, Russian roulette included */
+    struct rb_scene *both[2] = {lit, dark};
+    for (int k = 0; k < 2; k++) {
+        float *full = render_job(both[k], "full", 2, 0.0f, &r),
+              *bdpt = render_job(both[k], "bdpt", 5, 0.0f, &r);
+        assert_memory_equal(full, bdpt, n * RB_OUT_FLOATS * sizeof(float));
+        free(full);
+        free(bdpt);
     }
-    assert_true(sum5 > sum2 * 1.02);
-    free(full5);
+    /* The lamp alone, no roulette: the same, and BDPT's paths end there; FULL finds more light
+     * with a third bounce, so the BSDF sample from x3 counts the emitter it hits and goes no
+     * further */
+    float *full = render_space(lit, "[]", "full", 4, 2, 2, 0.0f, &r),
+          *bdpt = render_space(lit, "[]", "bdpt", 4, 5, 2, 0.0f, &r),
+          *full3 = render_space(lit, "[]", "full", 4, 3, 3, 0.0f, &r);
+    assert_memory_equal(full, bdpt, n * RB_OUT_FLOATS * sizeof(float));
+    double ind2 = layer_sum(bdpt, n, RB_OUT_INDIRECT), ind3 = layer_sum(full3, n, RB_OUT_INDIRECT);
+    print_message("# lamp alone: indirect %.4g (bdpt), %.4g (full, 3 bounces), direct %.4g\n", ind2,
+                  ind3, layer_sum(bdpt, n, RB_OUT_DIRECT));
+    assert_true(ind2 > 0.0 && ind3 > ind2 * 1.02);
+    free(full3);
     free(full);
     free(bdpt);
-    /* BDPT's direct layer == DIRECT (dark sky) and == FULL with no bounces (no lamp) */
-    float *direct = render_job(lit, "direct", 5, 0.0f, &r);
-    bdpt = render_job(lit, "bdpt", 5, 0.0f, &r);
+    /* and with more bounces FULL finds more light */
+    full = render_job(lit, "full", 2, 0.0f, &r);
+    float *full5 = render_job(lit, "full", 5, 0.0f, &r);
+    assert_true(layer_sum(full5, n, RB_OUT_INDIRECT) > layer_sum(full, n, RB_OUT_INDIRECT) * 1.02);
+    free(full5);
+    free(full);
+    /* BDPT's direct layer == DIRECT (dark sky and lamp), with the same AOVs */
+    float *direct = render_job(dark, "direct", 5, 0.0f, &r);
+    bdpt = render_job(dark, "bdpt", 5, 0.0f, &r);
     for (size_t i = 0; i < n; i++) {
         const float *pd = direct + i * RB_OUT_FLOATS, *pb = bdpt + i * RB_OUT_FLOATS;
         assert_memory_equal(pd + RB_OUT_DIRECT, pb + RB_OUT_DIRECT, 3 * sizeof(float));
@@ -1981,8 +2044,9 @@ static void test_path_spaces(void **state)
     }
     free(direct);
     free(bdpt);
-    bdpt = render_job(dark, "bdpt", 3, 1.0f, &r);
-    full = render_job(dark, "full", 0, 1.0f, &r);
+    /* and == FULL with no bounces: lamp, point light and sky at x1 */
+    bdpt = render_job(lit, "bdpt", 3, 1.0f, &r);
+    full = render_job(lit, "full", 0, 1.0f, &r);
     for (size_t i = 0; i < n; i++)
         assert_memory_equal(bdpt + i * RB_OUT_FLOATS + RB_OUT_DIRECT,
                             full + i * RB_OUT_FLOATS + RB_OUT_DIRECT, 3 * sizeof(float));
@@ -1990,6 +2054,130 @@ static void test_path_spaces(void **state)
     free(bdpt);
     rb_scene_destroy(dark);
     rb_scene_destroy(lit);
+}
+
+/* Emitters light as punctual lights do in BDPT's path space. A convex emitter of radiance L
+ * and surface area A is, seen from outside, a light of intensity L A / 4 on average over
+ * directions (Cauchy: a convex body's mean projected area is a quarter of its surface; L pi r^2
+ * for a true sphere, whose irradiance outside it is a point's at its centre). So a small
+ * emissive sphere and a point light of that intensity at its centre light the busy scene
+ * alike, directly and after one and two bounces, up to noise, facets and the sphere's shadow;
+ * a path space that gave emitters a bounce more or fewer than punctual lights would not. At
+ * 256 samples, since the metal sphere's BSDF samples that hit the small emitter are rare and
+ * bright; the facets and the shadow leave about 1.5%. */
+static void test_bdpt_emitter_as_point(void **state)
+{
+    (void)state;
+    struct rb_scene *sphere = busy_scene_lamp(0.0f), *point = busy_scene_lamp(0.0f);
+    uint32_t mat = add_material(sphere, lamp(1.0f));
+    uint32_t node = add_sphere(sphere, rb_v3(-0.8f, 1.5f, 0.8f), 0.05f, 16, 16, mat);
+    const struct rb_scene_primitive *prim =
+        &sphere->primitives[sphere->meshes[sphere->nodes[node].mesh].first_primitive];
+    double area = 0.0;
+    for (uint32_t i = 0; i < prim->index_count; i += 3) {
+        const uint32_t *t = &sphere->indices[prim->first_index + i];
+        const float *p0 = sphere->vertices[prim->first_vertex + t[0]].position;
+        const float *p1 = sphere->vertices[prim->first_vertex + t[1]].position;
+        const float *p2 = sphere->vertices[prim->first_vertex + t[2]].position;
+        struct rb_vec3 e1 = rb_v3(p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]);
+        struct rb_vec3 e2 = rb_v3(p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]);
+        area += 0.5 * rb_v3_length(rb_v3_cross(e1, e2));
+    }
+    float le = (float)(1.5 / (area / 4.0)); /* BUSY_POINT's intensity, 1.5 */
+    for (int c = 0; c < 3; c++)
+        sphere->materials[mat].emissive[c] = le;
+    struct rb_frame_result r;
+    size_t n = 24 * 20;
+    float *a = render_space(sphere, "[]", "bdpt", 256, 5, 2, 0.0f, &r),
+          *b = render_space(point, BUSY_POINT, "bdpt", 256, 5, 2, 0.0f, &r);
+    double sum[2][2] = {{0}};
+    uint32_t used = 0;
+    for (size_t i = 0; i < n; i++) {
+        const float *pa = a + i * RB_OUT_FLOATS, *pb = b + i * RB_OUT_FLOATS;
+        if (!(pa[RB_OUT_BEAUTY + 3] > 0.0f) ||
+            memcmp(pa + RB_OUT_ALBEDO, pb + RB_OUT_ALBEDO, 3 * sizeof(float)))
+            continue; /* the sky, or the sphere where the point light has nothing */
+        used++;
+        for (int c = 0; c < 3; c++) {
+            sum[0][0] += pa[RB_OUT_DIRECT + c];
+            sum[0][1] += pa[RB_OUT_INDIRECT + c];
+            sum[1][0] += pb[RB_OUT_DIRECT + c];
+            sum[1][1] += pb[RB_OUT_INDIRECT + c];
+        }
+    }
+    double rd = sum[0][0] / sum[1][0], ri = sum[0][1] / sum[1][1];
+    print_message("# emissive sphere / point light over %u pixels: direct %.4f, indirect %.4f\n",
+                  used, rd, ri);
+    assert_true(used > n / 2 && sum[1][1] > 0.0);
+    if (!(fabs(rd - 1.0) < 0.03 && fabs(ri - 1.0) < 0.04))
+        fail_msg("emissive sphere / point light: direct %g, indirect %g, not 1", rd, ri);
+    free(b);
+    free(a);
+    rb_scene_destroy(point);
+    rb_scene_destroy(sphere);
+}
+
+/* The area-lit Cornell box ($RB_SCENES, skipped without it), lit by its emissive quad alone:
+ * DIRECT sees the quad and nothing else; BDPT lights the room directly and after bounces, as
+ * FULL with two bounces does bit for bit, and FULL finds more with more bounces. */
+static void test_bdpt_cornell_box(void **state)
+{
+    (void)state;
+    char path[1024];
+    if (rb_test_scene(path, sizeof(path), "cornell-box/CornellBox.glb")) {
+        print_message("# cornell box: '%s' is absent ($RB_SCENES)\n", path);
+        skip(); /* a checkout without the external sample scenes */
+    }
+    struct rb_scene *s = NULL;
+    struct rb_err err = RB_ERR_INIT;
+    if (rb_scene_load(path, 0, &s, &err))
+        fail_msg("loading '%s' failed: %s", path, err.msg);
+    const char *spaces[4] = {"direct", "bdpt", "full", "full"};
+    const int bounces[4] = {8, 8, 2, 8};
+    float *px[4];
+    struct rb_frame_result r;
+    for (int k = 0; k < 4; k++) {
+        struct rb_job *job = job_new(
+            "resolution: [16, 16]\n"
+            "frames: {start: 0, end: 0, rate: 24}\n"
+            "default_light: off\n"
+            "integrator: {name: reference, reference: {spp: 4, max_bounces: %d, rr_depth: 2, "
+            "paths: %s}}\n",
+            bounces[k], spaces[k]);
+        struct rb_reference *ref = ref_new(job, s, 2);
+        px[k] = render(ref, 0, &r);
+        rb_reference_destroy(ref);
+        rb_job_destroy(job);
+    }
+    size_t n = 16 * 16;
+    uint32_t quad = 0, room = 0;
+    double sum[3] = {0}; /* BDPT's beauty, direct, indirect over the room */
+    for (size_t i = 0; i < n; i++) {
+        const float *pd = px[0] + i * RB_OUT_FLOATS, *pb = px[1] + i * RB_OUT_FLOATS;
+        if (!(pd[RB_OUT_BEAUTY + 3] > 0.0f))
+            continue;
+        if (pd[RB_OUT_BEAUTY] > 0.0f) { /* the quad's emission, the same in both */
+            quad++;
+            assert_true(pb[RB_OUT_DIRECT] >= pd[RB_OUT_DIRECT]);
+            continue;
+        }
+        room++;
+        for (int c = 0; c < 3; c++) {
+            sum[0] += pb[RB_OUT_BEAUTY + c] / 3.0;
+            sum[1] += pb[RB_OUT_DIRECT + c] / 3.0;
+            sum[2] += pb[RB_OUT_INDIRECT + c] / 3.0;
+        }
+    }
+    print_message("# cornell box, bdpt: %u room pixels, mean beauty %.4g = direct %.4g + indirect "
+                  "%.4g; %u quad pixels\n",
+                  room, sum[0] / room, sum[1] / room, sum[2] / room, quad);
+    assert_true(room > n / 2 && quad > 0);
+    assert_true(sum[0] / room > 0.05 && sum[2] > 0.1 * sum[1]);
+    assert_memory_equal(px[1], px[2], n * RB_OUT_FLOATS * sizeof(float));
+    assert_true(layer_sum(px[3], n, RB_OUT_INDIRECT) > 1.02 * layer_sum(px[2], n, RB_OUT_INDIRECT));
+    for (int k = 0; k < 4; k++)
+        free(px[k]);
+    rb_scene_destroy(s);
 }
 
 struct pass_log {
@@ -2103,6 +2291,8 @@ int main(void)
         cmocka_unit_test(test_motion_and_morph),
         cmocka_unit_test(test_pixel_filter),
         cmocka_unit_test(test_path_spaces),
+        cmocka_unit_test(test_bdpt_emitter_as_point),
+        cmocka_unit_test(test_bdpt_cornell_box),
         cmocka_unit_test(test_determinism),
         cmocka_unit_test(test_convergence),
         cmocka_unit_test(test_convergence_sobol),
