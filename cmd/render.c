@@ -50,6 +50,7 @@ struct options {
     const char *spp, *time_limit; /* as given, for messages */
     bool resume, validate, preview, quiet;
     bool is_lenient; /* --lenient: glTF type errors are warnings */
+    bool is_strict;  /* --strict: a full ray-bundle node buffer fails the frame */
     int verbose;
     const char *command; /* "render" or "reference" */
     /* Text behind the options that are sugar for --set (--frames, --size, ...). */
@@ -84,6 +85,7 @@ static void usage(FILE *f, const char *command)
             "  --device NAME|INDEX  pick a Vulkan device (default: lavapipe)\n"
             "  --validate           enable the Khronos validation layer; any message fails\n"
             "  --lenient            glTF properties of the wrong type are warnings, not errors\n"
+            "  --strict             bdpt: a full ray-bundle node buffer fails the frame (exit 1)\n"
             "  --spp N              reference: samples per pixel (integrator.reference.spp)\n"
             "  --time-limit S       reference: stop at the pass of samples that crosses S seconds\n"
             "  --threads N          reference: worker threads (default: all cores)\n"
@@ -156,7 +158,8 @@ static int parse_options(int argc, char **argv, struct options *o)
         O_LENIENT,
         O_SPP,
         O_TIME_LIMIT,
-        O_THREADS
+        O_THREADS,
+        O_STRICT
     };
     static const struct option opts[] = {
         {"frames", required_argument, NULL, O_FRAMES},
@@ -173,6 +176,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"time-limit", required_argument, NULL, O_TIME_LIMIT},
         {"threads", required_argument, NULL, O_THREADS},
         {"lenient", no_argument, NULL, O_LENIENT},
+        {"strict", no_argument, NULL, O_STRICT},
         {"quiet", no_argument, NULL, 'q'},
         {"verbose", no_argument, NULL, 'v'},
         {"help", no_argument, NULL, 'h'},
@@ -221,6 +225,7 @@ static int parse_options(int argc, char **argv, struct options *o)
             break;
         case O_THREADS: o->threads = optarg; break;
         case O_LENIENT: o->is_lenient = true; break;
+        case O_STRICT: o->is_strict = true; break;
         case 'q': o->quiet = true; break;
         case 'v': o->verbose++; break;
         case 'h': usage(stdout, o->command); return 1;
@@ -408,6 +413,7 @@ static int run(struct options *o, int argc, char **argv)
                                                         .env_height_px = env_h,
                                                         .device = o->device,
                                                         .validate = o->validate,
+                                                        .strict = o->is_strict,
                                                         .thread_count = threads,
                                                         .on_pass = on_reference_pass,
                                                         .user = &tty},

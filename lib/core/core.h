@@ -242,6 +242,9 @@ struct rb_frame_result {
     uint32_t spp;             /* samples per pixel reached (the reference); 0 otherwise */
     uint64_t ray_count;       /* rays traced (the reference); 0 otherwise */
     uint32_t nonfinite_count; /* NaN or infinite floats among the pixels */
+    /* bdpt's ray-bundle node buffer (0 for other integrators): the most nodes one bundle
+     * asked for, how many the buffer holds, and the fragments dropped because it was full */
+    uint32_t bundle_nodes_max, bundle_nodes_capacity, bundle_nodes_dropped;
 };
 
 #endif

@@ -185,22 +185,23 @@ void rb_gpu_memory_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 src_stages
  * transfers are fills and copies; a host read happens after the frame's fence. */
 enum rb_gpu_use {
     RB_GPU_USE_INVALID = 0,
-    RB_GPU_COMPUTE_UNIFORM,    /* uniform buffer, compute shader */
-    RB_GPU_COMPUTE_READ,       /* storage buffer or image, read by a compute shader */
-    RB_GPU_COMPUTE_WRITE,      /* storage buffer or image, written by a compute shader */
-    RB_GPU_COMPUTE_READ_WRITE, /* storage, read and written (atomics, accumulation) */
-    RB_GPU_COMPUTE_SAMPLED,    /* sampled image, compute shader */
-    RB_GPU_GRAPHICS_UNIFORM,   /* uniform buffer, vertex and fragment shaders */
-    RB_GPU_VERTEX_READ,        /* storage buffer, read by a vertex shader */
-    RB_GPU_GRAPHICS_READ,      /* storage buffer, read by vertex and fragment shaders */
-    RB_GPU_FRAGMENT_READ,      /* storage buffer, read by a fragment shader */
-    RB_GPU_FRAGMENT_SAMPLED,   /* sampled image, fragment shader */
-    RB_GPU_INDEX_READ,         /* index buffer */
-    RB_GPU_COLOR_ATTACHMENT,   /* cleared and drawn into */
-    RB_GPU_DEPTH_ATTACHMENT,   /* cleared, tested and written */
-    RB_GPU_TRANSFER_READ,      /* source of a copy */
-    RB_GPU_TRANSFER_WRITE,     /* filled, or the destination of a copy */
-    RB_GPU_HOST_READ,          /* read by the host after the frame's fence */
+    RB_GPU_COMPUTE_UNIFORM,     /* uniform buffer, compute shader */
+    RB_GPU_COMPUTE_READ,        /* storage buffer or image, read by a compute shader */
+    RB_GPU_COMPUTE_WRITE,       /* storage buffer or image, written by a compute shader */
+    RB_GPU_COMPUTE_READ_WRITE,  /* storage, read and written (atomics, accumulation) */
+    RB_GPU_COMPUTE_SAMPLED,     /* sampled image, compute shader */
+    RB_GPU_GRAPHICS_UNIFORM,    /* uniform buffer, vertex and fragment shaders */
+    RB_GPU_VERTEX_READ,         /* storage buffer, read by a vertex shader */
+    RB_GPU_GRAPHICS_READ,       /* storage buffer, read by vertex and fragment shaders */
+    RB_GPU_FRAGMENT_READ,       /* storage buffer, read by a fragment shader */
+    RB_GPU_FRAGMENT_SAMPLED,    /* sampled image, fragment shader */
+    RB_GPU_FRAGMENT_READ_WRITE, /* storage, read and written by a fragment shader (lists) */
+    RB_GPU_INDEX_READ,          /* index buffer */
+    RB_GPU_COLOR_ATTACHMENT,    /* cleared and drawn into */
+    RB_GPU_DEPTH_ATTACHMENT,    /* cleared, tested and written */
+    RB_GPU_TRANSFER_READ,       /* source of a copy */
+    RB_GPU_TRANSFER_WRITE,      /* filled, or the destination of a copy */
+    RB_GPU_HOST_READ,           /* read by the host after the frame's fence */
     RB_GPU_USE_COUNT
 };
 

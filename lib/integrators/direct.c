@@ -5,14 +5,6 @@
 
 #include <stdlib.h>
 
-struct direct {
-    struct rb_pass_animate *animate;
-    struct rb_pass_gbuffer *gbuffer;
-    struct rb_pass_shadow *shadow;
-    struct rb_pass_direct *direct;
-    struct rb_pass_output *output;
-};
-
 static uint32_t history_frames(const struct rb_job *job)
 {
     (void)job;
@@ -22,12 +14,9 @@ static uint32_t history_frames(const struct rb_job *job)
 static void destroy(struct rb_integrator *it, void *state)
 {
     (void)it;
-    struct direct *d = state;
-    rb_pass_output_destroy(d->output);
-    rb_pass_direct_destroy(d->direct);
-    rb_pass_shadow_destroy(d->shadow);
-    rb_pass_gbuffer_destroy(d->gbuffer);
-    rb_pass_animate_destroy(d->animate);
+    struct rb_base *d = state;
+    if (d)
+        rb_base_destroy(d);
     free(d);
 }
 
@@ -41,117 +30,30 @@ static enum rb_status create(struct rb_integrator *it, void **state, struct rb_e
                s->has_emitters && s->has_environment ? "emissive surfaces and the environment"
                : s->has_emitters                     ? "emissive surfaces"
                                                      : "the environment");
-    struct direct *d = calloc(1, sizeof(*d));
+    struct rb_base *d = calloc(1, sizeof(*d));
     if (!d)
         return rb_errf(err, RB_E_NOMEM, "out of memory");
-    enum rb_status st;
-    if ((st = rb_pass_animate_create(it->gpu, &d->animate, err)) ||
-        (st = rb_pass_gbuffer_create(it->gpu, &d->gbuffer, err)) ||
-        (st = rb_pass_shadow_create(it->gpu, &d->shadow, err)) ||
-        (st = rb_pass_direct_create(it->gpu, &d->direct, err)) ||
-        (st = rb_pass_output_create(it->gpu, &d->output, err))) {
-        destroy(it, d);
+    enum rb_status st = rb_base_create(it, d, err);
+    if (st) {
+        free(d);
         return st;
     }
     *state = d;
     return RB_OK;
 }
 
-/* Each pass's declaration lists every frame resource its record function binds, draws with
- * or copies, with how (the shaders' stages and readonly/writeonly qualifiers); the driver
- * derives the barriers between the passes from them. The output pass's non-finite counter is
- * its own: it zeroes it, orders that before its shader and makes it visible to the host. */
 static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
                    const struct rb_frame_ctx *ctx)
 {
-    struct direct *d = state;
-    struct rb_frame *frame = &it->frame;
-    const struct rb_frame_slot *cur = ctx->cur, *prev = ctx->prev;
-    const struct rb_gpu_image *gb = frame->gbuffer;
-
-    const struct rb_gpu_access animate[] = {
-        {.buffer = &frame->src_vertices, .use = RB_GPU_COMPUTE_READ},
-        {.buffer = &frame->morph_deltas, .use = RB_GPU_COMPUTE_READ},
-        {.buffer = &cur->instances, .use = RB_GPU_COMPUTE_READ},
-        {.buffer = &cur->joints, .use = RB_GPU_COMPUTE_READ},
-        {.buffer = &cur->weights, .use = RB_GPU_COMPUTE_READ},
-        {.buffer = &cur->vertices, .use = RB_GPU_COMPUTE_WRITE},
-    };
-    rb_integrator_pass_begin(it, cmd, "animate", animate, COUNT(animate));
-    rb_pass_animate_record(d->animate, cmd, frame, cur);
-    rb_integrator_pass_end(it, cmd);
-    if (ctx->is_warmup)
-        return; /* a later frame reads this frame's world vertices, nothing else */
-
-    const struct rb_gpu_access gbuffer[] = {
-        {.buffer = &frame->globals, .use = RB_GPU_GRAPHICS_UNIFORM},
-        {.buffer = &cur->vertices, .use = RB_GPU_VERTEX_READ},
-        {.buffer = &prev->vertices, .use = RB_GPU_VERTEX_READ},
-        {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
-        {.buffer = &frame->materials, .use = RB_GPU_FRAGMENT_READ},
-        {.image = &frame->srgb_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
-        {.image = &frame->linear_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
-        {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COLOR_ATTACHMENT},
-        {.image = &gb[RB_GB_NORMAL], .use = RB_GPU_COLOR_ATTACHMENT},
-        {.image = &gb[RB_GB_ALBEDO], .use = RB_GPU_COLOR_ATTACHMENT},
-        {.image = &gb[RB_GB_SPECULAR], .use = RB_GPU_COLOR_ATTACHMENT},
-        {.image = &gb[RB_GB_EMISSION], .use = RB_GPU_COLOR_ATTACHMENT},
-        {.image = &gb[RB_GB_MOTION], .use = RB_GPU_COLOR_ATTACHMENT},
-        {.image = &frame->depth, .use = RB_GPU_DEPTH_ATTACHMENT},
-    };
-    _Static_assert(RB_GBUFFER_COLOR_COUNT == 6, "every G-buffer attachment is declared");
-    rb_integrator_pass_begin(it, cmd, "gbuffer", gbuffer, COUNT(gbuffer));
-    rb_pass_gbuffer_record(d->gbuffer, cmd, frame, cur, prev);
-    rb_integrator_pass_end(it, cmd);
-
-    const struct rb_gpu_access shadow[] = {
-        {.buffer = &cur->vertices, .use = RB_GPU_VERTEX_READ},
-        {.buffer = &frame->shadow_views, .use = RB_GPU_GRAPHICS_READ},
-        {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
-        {.image = &frame->shadow_maps, .use = RB_GPU_COLOR_ATTACHMENT},
-        {.image = &frame->shadow_depth, .use = RB_GPU_DEPTH_ATTACHMENT},
-    };
-    rb_integrator_pass_begin(it, cmd, "shadow", shadow, COUNT(shadow));
-    rb_pass_shadow_record(d->shadow, cmd, frame, cur);
-    rb_integrator_pass_end(it, cmd);
-
-    const struct rb_gpu_access direct[] = {
-        {.buffer = &frame->globals, .use = RB_GPU_COMPUTE_UNIFORM},
-        {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COMPUTE_READ},
-        {.image = &gb[RB_GB_NORMAL], .use = RB_GPU_COMPUTE_READ},
-        {.image = &gb[RB_GB_ALBEDO], .use = RB_GPU_COMPUTE_READ},
-        {.image = &gb[RB_GB_SPECULAR], .use = RB_GPU_COMPUTE_READ},
-        {.image = &gb[RB_GB_EMISSION], .use = RB_GPU_COMPUTE_READ},
-        {.image = &gb[RB_GB_MOTION], .use = RB_GPU_COMPUTE_READ},
-        {.buffer = &frame->lights, .use = RB_GPU_COMPUTE_READ},
-        {.buffer = &frame->shadow_views, .use = RB_GPU_COMPUTE_READ},
-        {.image = &frame->shadow_maps, .use = RB_GPU_COMPUTE_SAMPLED},
-        {.image = &frame->env_map, .use = RB_GPU_COMPUTE_SAMPLED},
-        {.image = &frame->direct, .use = RB_GPU_COMPUTE_WRITE},
-    };
-    rb_integrator_pass_begin(it, cmd, "direct", direct, COUNT(direct));
-    rb_pass_direct_record(d->direct, cmd, frame);
-    rb_integrator_pass_end(it, cmd);
-
-    const struct rb_gpu_access output[] = {
-        {.buffer = &frame->globals, .use = RB_GPU_COMPUTE_UNIFORM},
-        {.image = frame->beauty, .use = RB_GPU_COMPUTE_READ},
-        {.image = &frame->direct, .use = RB_GPU_COMPUTE_READ},
-        {.image = &gb[RB_GB_ALBEDO], .use = RB_GPU_COMPUTE_READ},
-        {.image = &gb[RB_GB_NORMAL], .use = RB_GPU_COMPUTE_READ},
-        {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COMPUTE_READ},
-        {.image = &gb[RB_GB_MOTION], .use = RB_GPU_COMPUTE_READ},
-        {.buffer = &frame->readback, .use = RB_GPU_COMPUTE_WRITE},
-    };
-    rb_integrator_pass_begin(it, cmd, "output", output, COUNT(output));
-    rb_pass_output_record(d->output, cmd, frame, NULL);
-    rb_integrator_pass_end(it, cmd);
+    struct rb_base *d = state;
+    if (rb_base_record_direct(it, d, cmd, ctx))
+        rb_base_record_output(it, d, cmd, NULL);
 }
 
 static void collect(struct rb_integrator *it, void *state, struct rb_frame_result *out)
 {
     (void)it;
-    const struct direct *d = state;
+    const struct rb_base *d = state;
     out->nonfinite_count = rb_pass_output_nonfinite_count(d->output);
 }
 

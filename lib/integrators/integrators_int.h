@@ -43,6 +43,7 @@ struct rb_integrator_ops {
 };
 
 extern const struct rb_integrator_ops rb_integrator_direct;
+extern const struct rb_integrator_ops rb_integrator_bdpt;
 
 /* rb_integrator_create with the given ops instead of the job's integrator's (tests drive the
  * driver with integrators of their own). */
@@ -107,5 +108,25 @@ void rb_frame_write_globals(struct rb_frame *frame, const struct rb_job *job, in
 
 /* The camera's projection for the frame's aspect ratio. */
 struct rb_mat4 rb_frame_projection(const struct rb_frame *frame, const struct rb_camera *cam);
+
+/* ---- base.c: the passes a rasterizing integrator's frame starts and ends with ------------- */
+
+struct rb_base {
+    struct rb_pass_animate *animate;
+    struct rb_pass_gbuffer *gbuffer;
+    struct rb_pass_shadow *shadow;
+    struct rb_pass_direct *direct;
+    struct rb_pass_output *output;
+};
+
+enum rb_status rb_base_create(struct rb_integrator *it, struct rb_base *b, struct rb_err *err);
+void rb_base_destroy(struct rb_base *b);
+/* Records animate and, unless the frame is a warm-up, gbuffer, shadow and direct. Returns
+ * whether it recorded the frame's passes (false: a warm-up, which records nothing more). */
+bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
+                           const struct rb_frame_ctx *ctx);
+/* Records output. light: NULL, or the RB_BDPT_LIGHT_COUNT images of gathered light. */
+void rb_base_record_output(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
+                           const struct rb_gpu_image *light);
 
 #endif

@@ -850,6 +850,12 @@ enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t
     json_string(&t, tm->integrator);
     text_printf(&t, ",\n  \"width\": %u,\n  \"height\": %u", tm->width_px, tm->height_px);
     text_printf(&t, ",\n  \"nonfinite\": %u", tm->nonfinite_count);
+    if (tm->bundle_nodes_capacity)
+        text_printf(&t,
+                    ",\n  \"bundle_nodes\": {\"max\": %u, \"capacity\": %u, \"dropped\": %u, "
+                    "\"overflow\": %s}",
+                    tm->bundle_nodes_max, tm->bundle_nodes_capacity, tm->bundle_nodes_dropped,
+                    tm->bundle_nodes_dropped ? "true" : "false");
     if (tm->spp)
         text_printf(&t, ",\n  \"spp\": %u", tm->spp);
     if (tm->ray_count)

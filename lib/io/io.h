@@ -126,12 +126,16 @@ struct rb_io_timing {
     uint64_t ray_count; /* rays traced (the reference); written when > 0 */
     /* NaN or infinite values in the frame's layers; always written */
     uint32_t nonfinite_count;
+    /* bdpt's ray-bundle node buffer, written when capacity > 0: the most nodes one bundle
+     * asked for, the capacity, the fragments dropped (overflow: dropped > 0) */
+    uint32_t bundle_nodes_max, bundle_nodes_capacity, bundle_nodes_dropped;
 };
 
 /* Writes NAME.####.timing.json atomically:
  * {"frame": 12, "time_s": 0.5, "passes": [{"name": "gbuffer", "gpu_ms": 1.25, "count": 1}, ...],
  * (cpu_ms too where it is > 0)
- *  "wall_ms": 40.1, "device": "...", "driver": "...", ..., "nonfinite": 0}. */
+ *  "wall_ms": 40.1, "device": "...", "driver": "...", ..., "nonfinite": 0}, and for bdpt
+ *  "bundle_nodes": {"max": 5120, "capacity": 1048576, "dropped": 0, "overflow": false}. */
 enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t,
                                   struct rb_err *err);
 

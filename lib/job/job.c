@@ -1335,7 +1335,8 @@ out:
 }
 
 /* The default job for a quick look at a glTF: its first camera (or one fitted to the bounds),
- * its first animation, its own lights, written to out/<name>/ under the current directory. */
+ * its first animation, its own lights, rendered with bdpt, written to out/<name>/ under the
+ * current directory. */
 static enum rb_status quick_look(const char *path, const struct rb_job_override *overrides,
                                  size_t override_count, struct rb_job **out, struct rb_err *err)
 {
@@ -1359,6 +1360,8 @@ static enum rb_status quick_look(const char *path, const struct rb_job_override 
     }
     if ((st = apply_defaults(&c, "", c.job)))
         goto out;
+    /* A quick look shows the scene's light, whatever lights it: bdpt, not direct. */
+    c.job->integrator.name = RB_INTEGRATOR_BDPT;
     free(c.job->output);
     c.job->output = malloc(olen);
     c.job->path = rb_strdup(path);

@@ -20,6 +20,12 @@ _Static_assert(sizeof(struct rb_gpu_view) == 96, "view layout");
 _Static_assert(sizeof(struct rb_gpu_view_push) == 48, "view push constants");
 _Static_assert(sizeof(struct rb_gpu_list_node) == 20, "list node layout: seed 000's struct Node");
 _Static_assert(sizeof(struct rb_gpu_list_counter) == 16, "list counter layout");
+_Static_assert(sizeof(struct rb_gpu_vpl) == 80, "VPL layout");
+_Static_assert(sizeof(struct rb_gpu_bdpt_light) == 16, "bdpt light layout");
+_Static_assert(sizeof(struct rb_gpu_bdpt_sample) == 16, "bdpt sample layout");
+_Static_assert(sizeof(struct rb_gpu_bdpt_generate_push) == 48, "generate push constants");
+_Static_assert(sizeof(struct rb_gpu_bdpt_connect_push) == 64, "connect push constants");
+_Static_assert(sizeof(struct rb_gpu_bdpt_image_push) == 32, "split/gather/filter push constants");
 _Static_assert(sizeof(struct rb_scene_vertex) == RB_SRC_VERTEX_FLOATS * 4, "source vertex");
 _Static_assert(sizeof(struct rb_scene_morph_delta) == RB_MORPH_DELTA_FLOATS * 4, "morph delta");
 
@@ -238,5 +244,71 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
  * were NaN or infinite (0 for a clean frame). */
 uint32_t rb_pass_output_nonfinite_count(const struct rb_pass_output *p);
 void rb_pass_output_destroy(struct rb_pass_output *p);
+
+/* ---- bdpt.c: the bdpt integrator's compute passes (seed 000, A.1, B.1-B.3) --------------------
+ */
+
+/* The split G-buffer: position and view depth, shading normal and roughness, F0 and F90, the
+ * octahedral geometric normal. */
+#define RB_BDPT_SPLIT_COUNT 4
+
+/* What the bdpt passes read and write besides the frame: the integrator's own resources and
+ * settings (lib/integrators/bdpt.c fills it). All images RGBA32F unless said. */
+struct rb_bdpt_frame {
+    uint32_t vpl_count, bundle_count;     /* K_v, K_b: per frame */
+    uint32_t interleave;                  /* n: n x n sub-images */
+    uint32_t sub_width_px, sub_height_px; /* a sub-image: the frame's size / n, rounded up */
+    uint32_t vpl_size_px, bundle_size_px;
+    uint32_t filter_radius_px;
+    float filter_depth, filter_normal;
+    float clamp_g;  /* the bound on G of a VPL connection, in 1/m^2; 0: none */
+    float vpl_bias; /* fraction of the distance */
+    enum rb_bdpt_strategies strategies;
+    float scene_centre[3], scene_radius; /* the job's bounds */
+
+    struct rb_gpu_buffer bounds;       /* lo[4], hi[4]: the G-buffer's box (bdpt_bounds.comp) */
+    struct rb_gpu_buffer samples;      /* struct rb_gpu_bdpt_sample [K_v + K_b] */
+    struct rb_gpu_buffer lights;       /* struct rb_gpu_bdpt_light per light, host-visible */
+    struct rb_gpu_buffer vpls;         /* struct rb_gpu_vpl [K_v] */
+    struct rb_gpu_buffer vpl_views;    /* struct rb_gpu_view [K_v]: paraboloid */
+    struct rb_gpu_buffer bundle_views; /* struct rb_gpu_view [K_b]: orthographic */
+    struct rb_gpu_image rsm[RB_VIEW_RSM_TARGETS];   /* a layer per shadow layer of the frame */
+    struct rb_gpu_image rsm_depth;                  /* D32 scratch */
+    struct rb_gpu_image vpl_maps;                   /* R32F, a layer per VPL */
+    struct rb_gpu_image vpl_depth;                  /* D32 scratch */
+    struct rb_view_list bundle;                     /* one layer: the bundle being connected */
+    struct rb_gpu_image split[RB_BDPT_SPLIT_COUNT]; /* sub_* x n in size */
+    struct rb_gpu_image accum[RB_BDPT_LIGHT_COUNT]; /* split order, added to by connect */
+    struct rb_gpu_image gathered[RB_BDPT_LIGHT_COUNT], filtered[RB_BDPT_LIGHT_COUNT];
+};
+
+_Static_assert(RB_BDPT_STRATEGIES_MIS == RB_BDPT_MIS && RB_BDPT_STRATEGIES_VPL == RB_BDPT_VPL &&
+                   RB_BDPT_STRATEGIES_BUNDLE == RB_BDPT_BUNDLE,
+               "the strategies as the connect shader numbers them");
+
+struct rb_pass_bdpt;
+enum rb_status rb_pass_bdpt_create(struct rb_gpu *gpu, struct rb_pass_bdpt **out,
+                                   struct rb_err *err);
+void rb_pass_bdpt_destroy(struct rb_pass_bdpt *p);
+/* The box of the G-buffer's points into b->bounds (it fills the box empty first). */
+void rb_pass_bdpt_bounds_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                const struct rb_frame *frame, const struct rb_bdpt_frame *b);
+/* VPLs from the RSMs and the sampling table, their paraboloid views, the bundles' views. */
+void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                  const struct rb_frame *frame, const struct rb_bdpt_frame *b);
+/* The G-buffer into n x n sub-images (b->split); zeroes b->accum. */
+void rb_pass_bdpt_split_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                               const struct rb_frame *frame, const struct rb_bdpt_frame *b);
+/* Iteration k: VPL k and bundle k (in b->bundle's list) with sub-image k mod n^2, added to
+ * b->accum. */
+void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                 const struct rb_frame *frame, const struct rb_bdpt_frame *b,
+                                 uint32_t k);
+/* b->accum back to image order, into b->gathered. */
+void rb_pass_bdpt_gather_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                const struct rb_frame *frame, const struct rb_bdpt_frame *b);
+/* The geometry-aware filter of b->gathered into b->filtered. */
+void rb_pass_bdpt_filter_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                const struct rb_frame *frame, const struct rb_bdpt_frame *b);
 
 #endif

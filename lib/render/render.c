@@ -34,6 +34,7 @@ struct rb_render {
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
     void *user;
     bool was_stopped; /* on_pass said stop during this frame */
+    bool strict;      /* desc->strict */
     char hash[17];    /* the setup's job hash, as the EXR records it */
     char device[256], driver[256];
     float *scratch; /* the writer's copies of layers for the EXR and the preview */
@@ -80,6 +81,7 @@ enum rb_status rb_render_create(const struct rb_render_desc *desc, struct rb_ren
     r->job = job;
     r->setup = desc->setup;
     r->on_pass = desc->on_pass;
+    r->strict = desc->strict;
     r->user = desc->user;
     snprintf(r->hash, sizeof(r->hash), "%016llx", (unsigned long long)desc->setup->job_hash);
     enum rb_status st = RB_OK;
@@ -313,6 +315,9 @@ static enum rb_status write_timing(const struct rb_render *r, const char *exr_pa
         .spp = f->spp,
         .ray_count = f->ray_count,
         .nonfinite_count = f->nonfinite_count,
+        .bundle_nodes_max = f->bundle_nodes_max,
+        .bundle_nodes_capacity = f->bundle_nodes_capacity,
+        .bundle_nodes_dropped = f->bundle_nodes_dropped,
     };
     return rb_io_timing_write(path, &t, err);
 }
@@ -432,6 +437,12 @@ enum rb_status rb_render_frame(struct rb_render *r, int frame, const char *path,
                                           .nonfinite_count = f.nonfinite_count};
     if (info->is_partial)
         return RB_OK; /* never under the frame's name: --resume renders it again */
+    if (r->strict && f.bundle_nodes_dropped)
+        return rb_errf(err, RB_E_NOMEM,
+                       "frame %d: the ray-bundle node buffer overflowed (%u fragments dropped; a "
+                       "bundle needed %u nodes, the buffer holds %u), and --strict makes that "
+                       "an error: raise integrator.bdpt.node_buffer_kib",
+                       frame, f.bundle_nodes_dropped, f.bundle_nodes_max, f.bundle_nodes_capacity);
     info->wall_ms = (rb_monotonic_s() - t0) * 1e3;
     return hand_over(r, path, &f, info->wall_ms, err);
 }

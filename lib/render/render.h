@@ -20,6 +20,8 @@ struct rb_render_desc {
     uint32_t env_width_px, env_height_px;
     const char *device;    /* GPU: a device name substring or index; NULL: lavapipe */
     bool validate;         /* GPU: the Khronos validation layer; any message fails */
+    bool strict;           /* bdpt: a full ray-bundle node buffer fails the frame (nothing of it
+                            * is written) instead of a warning and a flag in the sidecar */
     uint32_t thread_count; /* reference: worker threads; 0: every core */
     /* reference: called after each pass of samples; returning false stops the frame, which is
      * then partial and not written. May be NULL. */

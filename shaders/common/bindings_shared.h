@@ -78,7 +78,8 @@
 #define RB_BIND_BDPT_SPLIT_GB_EMISSION 3
 #define RB_BIND_BDPT_SPLIT_GB_MOTION 4
 #define RB_BIND_BDPT_SPLIT_OUT 5 /* written: 4 images from here on */
-#define RB_BIND_BDPT_SPLIT_COUNT 9
+#define RB_BIND_BDPT_SPLIT_LIGHT 9 /* written (zeroed): RB_BDPT_LIGHT_COUNT accumulators */
+#define RB_BIND_BDPT_SPLIT_COUNT 13
 
 /* bdpt_connect.comp: one iteration's connections over one sub-image */
 #define RB_BIND_BDPT_CONNECT_GLOBALS 0

@@ -508,13 +508,15 @@ static void test_quick_look(void **state)
     assert_int_equal(job->animation.clip_count, 0);
     assert_true(job->use_scene_lights);
     assert_int_equal(job->width_px, 640);
-    assert_int_equal(job->integrator.name, RB_INTEGRATOR_DIRECT);
+    assert_int_equal(job->integrator.name, RB_INTEGRATOR_BDPT); /* shows every kind of light */
     rb_job_destroy(job);
 
     /* Overrides still apply; paths in them are relative to the current directory. */
     struct rb_job_override set[] = {{"resolution", "[64, 32]", NULL},
-                                    {"environment.map", JOBS "/sky.hdr", NULL}};
-    job = must_load(fox, set, 2);
+                                    {"environment.map", JOBS "/sky.hdr", NULL},
+                                    {"integrator.name", "direct", NULL}};
+    job = must_load(fox, set, 3);
+    assert_int_equal(job->integrator.name, RB_INTEGRATOR_DIRECT);
     assert_int_equal(job->width_px, 64);
     assert_int_equal(job->height_px, 32);
     assert_string_equal(job->environment.map, JOBS "/sky.hdr");

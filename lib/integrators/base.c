@@ -1,0 +1,129 @@
+/* The passes every rasterizing integrator starts and ends its frame with: animate -> gbuffer
+ * -> shadow -> direct, then output. direct records them alone; bdpt records its own passes
+ * between direct and output (DESIGN.md "Frame driver"). */
+#include "integrators/integrators_int.h"
+
+enum rb_status rb_base_create(struct rb_integrator *it, struct rb_base *b, struct rb_err *err)
+{
+    *b = (struct rb_base){0};
+    enum rb_status st;
+    if ((st = rb_pass_animate_create(it->gpu, &b->animate, err)) ||
+        (st = rb_pass_gbuffer_create(it->gpu, &b->gbuffer, err)) ||
+        (st = rb_pass_shadow_create(it->gpu, &b->shadow, err)) ||
+        (st = rb_pass_direct_create(it->gpu, &b->direct, err)) ||
+        (st = rb_pass_output_create(it->gpu, &b->output, err)))
+        rb_base_destroy(b);
+    return st;
+}
+
+void rb_base_destroy(struct rb_base *b)
+{
+    rb_pass_output_destroy(b->output);
+    rb_pass_direct_destroy(b->direct);
+    rb_pass_shadow_destroy(b->shadow);
+    rb_pass_gbuffer_destroy(b->gbuffer);
+    rb_pass_animate_destroy(b->animate);
+    *b = (struct rb_base){0};
+}
+
+/* Each pass's declaration lists every frame resource its record function binds, draws with
+ * or copies, with how (the shaders' stages and readonly/writeonly qualifiers); the driver
+ * derives the barriers between the passes from them. */
+bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
+                           const struct rb_frame_ctx *ctx)
+{
+    struct rb_frame *frame = &it->frame;
+    const struct rb_frame_slot *cur = ctx->cur, *prev = ctx->prev;
+    const struct rb_gpu_image *gb = frame->gbuffer;
+
+    const struct rb_gpu_access animate[] = {
+        {.buffer = &frame->src_vertices, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &frame->morph_deltas, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &cur->instances, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &cur->joints, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &cur->weights, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &cur->vertices, .use = RB_GPU_COMPUTE_WRITE},
+    };
+    rb_integrator_pass_begin(it, cmd, "animate", animate, COUNT(animate));
+    rb_pass_animate_record(b->animate, cmd, frame, cur);
+    rb_integrator_pass_end(it, cmd);
+    if (ctx->is_warmup)
+        return false; /* a later frame reads this frame's world vertices, nothing else */
+
+    const struct rb_gpu_access gbuffer[] = {
+        {.buffer = &frame->globals, .use = RB_GPU_GRAPHICS_UNIFORM},
+        {.buffer = &cur->vertices, .use = RB_GPU_VERTEX_READ},
+        {.buffer = &prev->vertices, .use = RB_GPU_VERTEX_READ},
+        {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
+        {.buffer = &frame->materials, .use = RB_GPU_FRAGMENT_READ},
+        {.image = &frame->srgb_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
+        {.image = &frame->linear_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
+        {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &gb[RB_GB_NORMAL], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &gb[RB_GB_ALBEDO], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &gb[RB_GB_SPECULAR], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &gb[RB_GB_EMISSION], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &gb[RB_GB_MOTION], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &frame->depth, .use = RB_GPU_DEPTH_ATTACHMENT},
+    };
+    _Static_assert(RB_GBUFFER_COLOR_COUNT == 6, "every G-buffer attachment is declared");
+    rb_integrator_pass_begin(it, cmd, "gbuffer", gbuffer, COUNT(gbuffer));
+    rb_pass_gbuffer_record(b->gbuffer, cmd, frame, cur, prev);
+    rb_integrator_pass_end(it, cmd);
+
+    const struct rb_gpu_access shadow[] = {
+        {.buffer = &cur->vertices, .use = RB_GPU_VERTEX_READ},
+        {.buffer = &frame->shadow_views, .use = RB_GPU_GRAPHICS_READ},
+        {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
+        {.image = &frame->shadow_maps, .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &frame->shadow_depth, .use = RB_GPU_DEPTH_ATTACHMENT},
+    };
+    rb_integrator_pass_begin(it, cmd, "shadow", shadow, COUNT(shadow));
+    rb_pass_shadow_record(b->shadow, cmd, frame, cur);
+    rb_integrator_pass_end(it, cmd);
+
+    const struct rb_gpu_access direct[] = {
+        {.buffer = &frame->globals, .use = RB_GPU_COMPUTE_UNIFORM},
+        {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_NORMAL], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_ALBEDO], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_SPECULAR], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_EMISSION], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_MOTION], .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &frame->lights, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &frame->shadow_views, .use = RB_GPU_COMPUTE_READ},
+        {.image = &frame->shadow_maps, .use = RB_GPU_COMPUTE_SAMPLED},
+        {.image = &frame->env_map, .use = RB_GPU_COMPUTE_SAMPLED},
+        {.image = &frame->direct, .use = RB_GPU_COMPUTE_WRITE},
+    };
+    rb_integrator_pass_begin(it, cmd, "direct", direct, COUNT(direct));
+    rb_pass_direct_record(b->direct, cmd, frame);
+    rb_integrator_pass_end(it, cmd);
+    return true;
+}
+
+/* The output pass's non-finite counter is its own: it zeroes it, orders that before its shader
+ * and makes it visible to the host. */
+void rb_base_record_output(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
+                           const struct rb_gpu_image *light)
+{
+    struct rb_frame *frame = &it->frame;
+    const struct rb_gpu_image *gb = frame->gbuffer;
+    struct rb_gpu_access output[8 + 1 + RB_BDPT_LIGHT_COUNT] = {
+        {.buffer = &frame->globals, .use = RB_GPU_COMPUTE_UNIFORM},
+        {.image = frame->beauty, .use = RB_GPU_COMPUTE_READ},
+        {.image = &frame->direct, .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_ALBEDO], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_NORMAL], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_MOTION], .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &frame->readback, .use = RB_GPU_COMPUTE_WRITE},
+        {.image = &gb[RB_GB_SPECULAR], .use = RB_GPU_COMPUTE_READ},
+    };
+    uint32_t count = 9;
+    for (uint32_t i = 0; light && i < RB_BDPT_LIGHT_COUNT; i++)
+        output[count++] = (struct rb_gpu_access){.image = &light[i], .use = RB_GPU_COMPUTE_READ};
+    rb_integrator_pass_begin(it, cmd, "output", output, count);
+    rb_pass_output_record(b->output, cmd, frame, light);
+    rb_integrator_pass_end(it, cmd);
+}

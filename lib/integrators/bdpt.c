@@ -1,0 +1,568 @@
+/* The bdpt integrator (seed 000; DESIGN.md "bdpt", BDPT.md): direct's frame, then
+ *   rsm -> bounds -> generate -> vpl -> split -> (bundle k -> connect k) for each k -> gather
+ *   -> filter -> output.
+ * Reflective shadow maps of the shadowed punctual lights give the VPLs' surfaces; each VPL gets
+ * a paraboloid shadow map; each global ray-bundle is an orthographic view into per-pixel linked
+ * lists, connected to the sub-image of the interleaved G-buffer it lights before the next one
+ * reuses the list. Its history is direct's: one frame, for motion vectors. */
+#include "integrators/integrators_int.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct bdpt {
+    struct rb_base base;
+    struct rb_pass_view *views;
+    struct rb_pass_bdpt *passes;
+    struct rb_bdpt_frame b;
+    struct rb_gpu_buffer usage; /* struct rb_gpu_list_counter per bundle, host-visible */
+};
+
+/* The sampling table's streams (rb_qmc_point2): fixed, so every scene and frame draws the same
+ * numbers. */
+enum { STREAM_VPL_DIRECTION = 1, STREAM_VPL_LIGHT = 2, STREAM_BUNDLE = 3 };
+
+static uint32_t history_frames(const struct rb_job *job)
+{
+    (void)job;
+    return 1;
+}
+
+static void release(struct rb_gpu *gpu, struct bdpt *d)
+{
+    struct rb_bdpt_frame *b = &d->b;
+    struct rb_gpu_buffer *buffers[] = {&b->bounds,    &b->samples,      &b->lights, &b->vpls,
+                                       &b->vpl_views, &b->bundle_views, &d->usage};
+    for (size_t i = 0; i < COUNT(buffers); i++)
+        rb_gpu_buffer_release(gpu, buffers[i]);
+    for (int i = 0; i < RB_VIEW_RSM_TARGETS; i++)
+        rb_gpu_image_release(gpu, &b->rsm[i]);
+    rb_gpu_image_release(gpu, &b->rsm_depth);
+    rb_gpu_image_release(gpu, &b->vpl_maps);
+    rb_gpu_image_release(gpu, &b->vpl_depth);
+    rb_view_list_release(gpu, &b->bundle);
+    for (int i = 0; i < RB_BDPT_LIGHT_COUNT; i++) {
+        rb_gpu_image_release(gpu, &b->split[i]);
+        rb_gpu_image_release(gpu, &b->accum[i]);
+        rb_gpu_image_release(gpu, &b->gathered[i]);
+        rb_gpu_image_release(gpu, &b->filtered[i]);
+    }
+}
+
+static void destroy(struct rb_integrator *it, void *state)
+{
+    struct bdpt *d = state;
+    if (!d)
+        return;
+    release(it->gpu, d);
+    rb_pass_bdpt_destroy(d->passes);
+    rb_pass_view_destroy(d->views);
+    rb_base_destroy(&d->base);
+    free(d);
+}
+
+static enum rb_status buffer(struct rb_gpu *gpu, VkDeviceSize bytes, bool host_visible,
+                             const char *name, struct rb_gpu_buffer *out, struct rb_err *err)
+{
+    return rb_gpu_buffer_init(
+        gpu,
+        &(struct rb_gpu_buffer_desc){
+            .size_bytes = bytes,
+            .usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+            .is_host_visible = host_visible,
+            .debug_name = name,
+        },
+        out, err);
+}
+
+static enum rb_status image(struct rb_gpu *gpu, uint32_t w, uint32_t h, uint32_t layers,
+                            VkFormat format, VkImageUsageFlags usage, bool layer_views,
+                            const char *name, struct rb_gpu_image *out, struct rb_err *err)
+{
+    return rb_gpu_image_init(gpu,
+                             &(struct rb_gpu_image_desc){.width_px = w,
+                                                         .height_px = h,
+                                                         .layer_count = layers,
+                                                         .format = format,
+                                                         .usage = usage,
+                                                         .is_array = layer_views,
+                                                         .has_layer_views = layer_views,
+                                                         .debug_name = name},
+                             out, err);
+}
+
+/* The fixed quasi-random table (BDPT.md "Sampling"): VPL i draws its light and its direction
+ * from rows i, bundle i its direction from row K_v + i. */
+static enum rb_status upload_samples(struct rb_gpu *gpu, struct rb_bdpt_frame *b,
+                                     struct rb_err *err)
+{
+    uint32_t rows = b->vpl_count + b->bundle_count;
+    struct rb_gpu_bdpt_sample *s = calloc(rows ? rows : 1, sizeof(*s));
+    if (!s)
+        return rb_errf(err, RB_E_NOMEM, "out of memory");
+    for (uint32_t i = 0; i < rows; i++) {
+        uint32_t u[2], l[2];
+        bool is_vpl = i < b->vpl_count;
+        uint32_t index = is_vpl ? i : i - b->vpl_count;
+        if (is_vpl) {
+            rb_qmc_point2(STREAM_VPL_LIGHT, index, l);
+            rb_qmc_point2(STREAM_VPL_DIRECTION, index, u);
+            s[i].u[0] = rb_qmc_float(l[0]);
+            s[i].u[1] = rb_qmc_float(u[0]);
+            s[i].u[2] = rb_qmc_float(u[1]);
+        } else {
+            rb_qmc_point2(STREAM_BUNDLE, index, u);
+            s[i].u[0] = rb_qmc_float(u[0]);
+            s[i].u[1] = rb_qmc_float(u[1]);
+        }
+    }
+    enum rb_status st = rb_gpu_buffer_upload(gpu, &b->samples, s,
+                                             (VkDeviceSize)(rows ? rows : 1) * sizeof(*s), err);
+    free(s);
+    return st;
+}
+
+static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, struct rb_err *err)
+{
+    struct rb_gpu *gpu = it->gpu;
+    struct rb_frame *frame = &it->frame;
+    struct rb_bdpt_frame *b = &d->b;
+    uint32_t kv = b->vpl_count ? b->vpl_count : 1, kb = b->bundle_count ? b->bundle_count : 1;
+    enum rb_status st;
+    if ((st = buffer(gpu, 8 * sizeof(uint32_t), false, "bdpt.bounds", &b->bounds, err)) ||
+        (st = buffer(gpu, (VkDeviceSize)(kv + kb) * sizeof(struct rb_gpu_bdpt_sample), false,
+                     "bdpt.samples", &b->samples, err)) ||
+        (st = buffer(gpu, RB_MAX_LIGHTS * sizeof(struct rb_gpu_bdpt_light), true, "bdpt.lights",
+                     &b->lights, err)) ||
+        (st = buffer(gpu, kv * sizeof(struct rb_gpu_vpl), false, "bdpt.vpls", &b->vpls, err)) ||
+        (st = buffer(gpu, kv * sizeof(struct rb_gpu_view), false, "bdpt.vpl_views", &b->vpl_views,
+                     err)) ||
+        (st = buffer(gpu, kb * sizeof(struct rb_gpu_view), false, "bdpt.bundle_views",
+                     &b->bundle_views, err)) ||
+        (st = buffer(gpu, kb * sizeof(struct rb_gpu_list_counter), true, "bdpt.usage", &d->usage,
+                     err)) ||
+        (st = upload_samples(gpu, b, err)))
+        return st;
+
+    const VkImageUsageFlags target =
+        VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT;
+    const VkImageUsageFlags storage = VK_IMAGE_USAGE_STORAGE_BIT;
+    uint32_t rsm = it->job->integrator.bdpt.rsm_size_px;
+    uint32_t rsm_layers = frame->shadow_layer_count ? frame->shadow_layer_count : 1;
+    static const char *const rsm_names[RB_VIEW_RSM_TARGETS] = {
+        "bdpt.rsm.position", "bdpt.rsm.normal", "bdpt.rsm.flux", "bdpt.rsm.material"};
+    for (int i = 0; i < RB_VIEW_RSM_TARGETS && st == RB_OK; i++)
+        st = image(gpu, rsm, rsm, rsm_layers, rb_view_rsm_formats[i], target, true, rsm_names[i],
+                   &b->rsm[i], err);
+    if (st == RB_OK)
+        st = image(gpu, rsm, rsm, 1, VK_FORMAT_D32_SFLOAT,
+                   VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "bdpt.rsm.depth",
+                   &b->rsm_depth, err);
+    if (st == RB_OK)
+        st = image(gpu, b->vpl_size_px, b->vpl_size_px, kv, VK_FORMAT_R32_SFLOAT,
+                   VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, true,
+                   "bdpt.vpl_maps", &b->vpl_maps, err);
+    if (st == RB_OK)
+        st = image(gpu, b->vpl_size_px, b->vpl_size_px, 1, VK_FORMAT_D32_SFLOAT,
+                   VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "bdpt.vpl_depth",
+                   &b->vpl_depth, err);
+    uint64_t nodes =
+        (uint64_t)it->job->integrator.bdpt.node_buffer_kib * 1024 / sizeof(struct rb_gpu_list_node);
+    if (st == RB_OK)
+        st = rb_view_list_init(gpu,
+                               &(struct rb_view_list_desc){.width_px = b->bundle_size_px,
+                                                           .height_px = b->bundle_size_px,
+                                                           .capacity_nodes = (uint32_t)nodes,
+                                                           .debug_name = "bdpt.bundle"},
+                               &b->bundle, err);
+    uint32_t sw = b->sub_width_px * b->interleave, sh = b->sub_height_px * b->interleave;
+    static const char *const split_names[RB_BDPT_SPLIT_COUNT] = {
+        "bdpt.split.position", "bdpt.split.normal", "bdpt.split.fresnel", "bdpt.split.geometric"};
+    static const char *const light_names[3][RB_BDPT_LIGHT_COUNT] = {
+        {"bdpt.accum.direct_diffuse", "bdpt.accum.direct_specular", "bdpt.accum.indirect_diffuse",
+         "bdpt.accum.indirect_specular"},
+        {"bdpt.gathered.direct_diffuse", "bdpt.gathered.direct_specular",
+         "bdpt.gathered.indirect_diffuse", "bdpt.gathered.indirect_specular"},
+        {"bdpt.filtered.direct_diffuse", "bdpt.filtered.direct_specular",
+         "bdpt.filtered.indirect_diffuse", "bdpt.filtered.indirect_specular"}};
+    const VkFormat f = VK_FORMAT_R32G32B32A32_SFLOAT;
+    for (int i = 0; i < RB_BDPT_SPLIT_COUNT && st == RB_OK; i++)
+        st = image(gpu, sw, sh, 1, f, storage, false, split_names[i], &b->split[i], err);
+    for (int i = 0; i < RB_BDPT_LIGHT_COUNT && st == RB_OK; i++)
+        if ((st = image(gpu, sw, sh, 1, f, storage, false, light_names[0][i], &b->accum[i], err)) ==
+                RB_OK &&
+            (st = image(gpu, frame->width_px, frame->height_px, 1, f, storage, false,
+                        light_names[1][i], &b->gathered[i], err)) == RB_OK)
+            st = image(gpu, frame->width_px, frame->height_px, 1, f, storage, false,
+                       light_names[2][i], &b->filtered[i], err);
+    if (st)
+        return st;
+
+    VkCommandBuffer cmd;
+    if ((st = rb_gpu_oneshot_begin(gpu, &cmd, err)))
+        return st;
+    struct rb_gpu_image *general[] = {&b->rsm[0],    &b->rsm[1],   &b->rsm[2],   &b->rsm[3],
+                                      &b->rsm_depth, &b->vpl_maps, &b->vpl_depth};
+    for (size_t i = 0; i < COUNT(general); i++)
+        rb_gpu_image_barrier(gpu, cmd, general[i], VK_IMAGE_LAYOUT_UNDEFINED,
+                             VK_IMAGE_LAYOUT_GENERAL);
+    for (int i = 0; i < RB_BDPT_LIGHT_COUNT; i++) {
+        rb_gpu_image_barrier(gpu, cmd, &b->split[i], VK_IMAGE_LAYOUT_UNDEFINED,
+                             VK_IMAGE_LAYOUT_GENERAL);
+        rb_gpu_image_barrier(gpu, cmd, &b->accum[i], VK_IMAGE_LAYOUT_UNDEFINED,
+                             VK_IMAGE_LAYOUT_GENERAL);
+        rb_gpu_image_barrier(gpu, cmd, &b->gathered[i], VK_IMAGE_LAYOUT_UNDEFINED,
+                             VK_IMAGE_LAYOUT_GENERAL);
+        rb_gpu_image_barrier(gpu, cmd, &b->filtered[i], VK_IMAGE_LAYOUT_UNDEFINED,
+                             VK_IMAGE_LAYOUT_GENERAL);
+    }
+    return rb_gpu_oneshot_end(gpu, cmd, err);
+}
+
+static enum rb_status create(struct rb_integrator *it, void **state, struct rb_err *err)
+{
+    const struct rb_job_bdpt *job = &it->job->integrator.bdpt;
+    const struct rb_frame *frame = &it->frame;
+    struct bdpt *d = calloc(1, sizeof(*d));
+    if (!d)
+        return rb_errf(err, RB_E_NOMEM, "out of memory");
+    struct rb_bdpt_frame *b = &d->b;
+    uint32_t n = job->interleave ? job->interleave : 1;
+    struct rb_vec3 lo = it->setup.bounds_min, hi = it->setup.bounds_max;
+    float diag = rb_v3_length(rb_v3_sub(hi, lo));
+    if (!(diag > 0.0f))
+        diag = 2.0f;
+    *b = (struct rb_bdpt_frame){
+        .vpl_count = job->vpls,
+        .bundle_count = job->bundles,
+        .interleave = n,
+        .sub_width_px = (frame->width_px + n - 1) / n,
+        .sub_height_px = (frame->height_px + n - 1) / n,
+        .vpl_size_px = job->vpl_size_px,
+        .bundle_size_px = job->bundle_size_px,
+        .filter_radius_px = job->filter_radius_px,
+        .filter_depth = job->filter_depth,
+        .filter_normal = job->filter_normal,
+        .clamp_g = job->clamp / (diag * diag),
+        .vpl_bias = job->vpl_bias,
+        .strategies = job->strategies ? job->strategies : RB_BDPT_STRATEGIES_MIS,
+        .scene_centre = {0.5f * (lo.x + hi.x), 0.5f * (lo.y + hi.y), 0.5f * (lo.z + hi.z)},
+        .scene_radius = 0.5f * diag,
+    };
+    static const struct rb_view_variant variants[] = {
+        {RB_VIEW_KIND_PERSPECTIVE, RB_VIEW_OUTPUT_RSM},
+        {RB_VIEW_KIND_ORTHOGRAPHIC, RB_VIEW_OUTPUT_RSM},
+        {RB_VIEW_KIND_PARABOLOID, RB_VIEW_OUTPUT_DEPTH},
+        {RB_VIEW_KIND_ORTHOGRAPHIC, RB_VIEW_OUTPUT_LIST},
+    };
+    enum rb_status st;
+    if ((st = rb_base_create(it, &d->base, err)) ||
+        (st = rb_pass_view_create(it->gpu,
+                                  &(struct rb_pass_view_desc){.variants = variants,
+                                                              .variant_count = COUNT(variants),
+                                                              .debug_name = "bdpt.view"},
+                                  &d->views, err)) ||
+        (st = rb_pass_bdpt_create(it->gpu, &d->passes, err)) || (st = make_resources(it, d, err))) {
+        destroy(it, d);
+        return st;
+    }
+    *state = d;
+    return RB_OK;
+}
+
+static float luminance(const float c[3])
+{
+    return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
+}
+
+/* Each light's chance of a VPL, by emitted power (BDPT.md "VPL"), and its sampling densities:
+ * a point light's sphere, a spot light's cone, a directional light's beam across its shadow
+ * map's square. Lights without a shadow map get no VPLs (the bundles' side lights them). */
+static void write_lights(const struct rb_integrator *it, struct rb_bdpt_frame *b,
+                         const struct rb_moment *m)
+{
+    struct rb_gpu_bdpt_light *out = b->lights.mapped;
+    const struct rb_gpu_light *gl = it->frame.lights.mapped;
+    double power[RB_MAX_LIGHTS], total = 0.0;
+    float beam = 2.0f * b->scene_radius; /* write_shadow_views' box: 2 radius across */
+    for (uint32_t i = 0; i < m->light_count; i++) {
+        const struct rb_world_light *l = &m->lights[i];
+        float lum = luminance(l->color), density, cos_outer = 0.0f;
+        if (l->type == RB_LIGHT_DIRECTIONAL) {
+            density = 1.0f / (beam * beam);
+        } else if (l->type == RB_LIGHT_SPOT) {
+            cos_outer = cosf(l->outer_cone_rad);
+            density = 1.0f / (2.0f * (float)RB_PI * (1.0f - cos_outer));
+        } else {
+            density = 1.0f / (4.0f * (float)RB_PI);
+        }
+        power[i] = gl[i].color[3] >= 0.0f && lum > 0.0f ? lum / density : 0.0;
+        total += power[i];
+        out[i] = (struct rb_gpu_bdpt_light){.choice = {0.0f, 0.0f, density, cos_outer}};
+    }
+    double cdf = 0.0;
+    for (uint32_t i = 0; i < m->light_count && total > 0.0; i++) {
+        cdf += power[i];
+        out[i].choice[0] = (float)(power[i] / total);
+        out[i].choice[1] = cdf >= total ? 1.0f : (float)(cdf / total);
+    }
+}
+
+static void record_rsm(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer cmd,
+                       const struct rb_frame_ctx *ctx)
+{
+    struct rb_frame *frame = &it->frame;
+    struct rb_bdpt_frame *b = &d->b;
+    const struct rb_gpu_access uses[] = {
+        {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
+        {.buffer = &frame->shadow_views, .use = RB_GPU_GRAPHICS_READ},
+        {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
+        {.buffer = &frame->materials, .use = RB_GPU_FRAGMENT_READ},
+        {.image = &frame->srgb_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
+        {.image = &frame->linear_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
+        {.image = &b->rsm[0], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &b->rsm[1], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &b->rsm[2], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &b->rsm[3], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &b->rsm_depth, .use = RB_GPU_DEPTH_ATTACHMENT},
+    };
+    rb_integrator_pass_begin(it, cmd, "rsm", uses, COUNT(uses));
+    const struct rb_gpu_light *lights = frame->lights.mapped;
+    for (uint32_t i = 0; i < frame->light_count; i++) {
+        int first = (int)lights[i].color[3];
+        if (first < 0)
+            continue;
+        uint32_t kind = (uint32_t)lights[i].position[3];
+        struct rb_view_batch batch = {
+            .kind =
+                kind == RB_KIND_DIRECTIONAL ? RB_VIEW_KIND_ORTHOGRAPHIC : RB_VIEW_KIND_PERSPECTIVE,
+            .output = RB_VIEW_OUTPUT_RSM,
+            .views = &frame->shadow_views,
+            .first_view = (uint32_t)first,
+            .first_layer = (uint32_t)first,
+            .view_count = kind == RB_KIND_POINT ? 6 : 1,
+            .targets = {&b->rsm[0], &b->rsm[1], &b->rsm[2], &b->rsm[3]},
+            .depth = &b->rsm_depth,
+            .intensity = {lights[i].color[0], lights[i].color[1], lights[i].color[2]},
+        };
+        rb_pass_view_record(d->views, cmd, frame, ctx->cur, &batch);
+    }
+    rb_integrator_pass_end(it, cmd);
+}
+
+static void record_bundle(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer cmd,
+                          const struct rb_frame_ctx *ctx, uint32_t k)
+{
+    struct rb_frame *frame = &it->frame;
+    struct rb_bdpt_frame *b = &d->b;
+    const struct rb_gpu_access uses[] = {
+        {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
+        {.buffer = &b->bundle_views, .use = RB_GPU_GRAPHICS_READ},
+        {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
+        {.buffer = &frame->materials, .use = RB_GPU_FRAGMENT_READ},
+        {.image = &frame->srgb_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
+        {.image = &frame->linear_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
+        {.image = &b->bundle.heads, .use = RB_GPU_FRAGMENT_READ_WRITE},
+        {.buffer = &b->bundle.nodes, .use = RB_GPU_FRAGMENT_READ_WRITE},
+        {.buffer = &d->usage, .use = RB_GPU_TRANSFER_WRITE},
+    };
+    rb_integrator_pass_begin(it, cmd, "bundle", uses, COUNT(uses));
+    struct rb_view_batch batch = {
+        .kind = RB_VIEW_KIND_ORTHOGRAPHIC,
+        .output = RB_VIEW_OUTPUT_LIST,
+        .views = &b->bundle_views,
+        .first_view = k,
+        .first_layer = 0,
+        .view_count = 1,
+        .list = &b->bundle,
+    };
+    rb_pass_view_record(d->views, cmd, frame, ctx->cur, &batch);
+    /* The pool's counters, kept per bundle for collect (the next batch resets them). */
+    rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                          VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    VkBufferCopy region = {.srcOffset = 0,
+                           .dstOffset = (VkDeviceSize)k * sizeof(struct rb_gpu_list_counter),
+                           .size = sizeof(struct rb_gpu_list_counter)};
+    vkCmdCopyBuffer(cmd, b->bundle.counter.buffer, d->usage.buffer, 1, &region);
+    rb_integrator_pass_end(it, cmd);
+}
+
+static void record_connect(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer cmd,
+                           uint32_t k)
+{
+    struct rb_frame *frame = &it->frame;
+    struct rb_bdpt_frame *b = &d->b;
+    struct rb_gpu_access uses[16 + RB_BDPT_SPLIT_COUNT + RB_BDPT_LIGHT_COUNT] = {
+        {.buffer = &frame->globals, .use = RB_GPU_COMPUTE_UNIFORM},
+        {.buffer = &b->vpls, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &b->vpl_views, .use = RB_GPU_COMPUTE_READ},
+        {.image = &b->vpl_maps, .use = RB_GPU_COMPUTE_SAMPLED},
+        {.buffer = &b->bundle_views, .use = RB_GPU_COMPUTE_READ},
+        {.image = &b->bundle.heads, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &b->bundle.nodes, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &frame->lights, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &b->lights, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &frame->shadow_views, .use = RB_GPU_COMPUTE_READ},
+        {.image = &frame->shadow_maps, .use = RB_GPU_COMPUTE_SAMPLED},
+        {.image = &frame->env_map, .use = RB_GPU_COMPUTE_SAMPLED},
+    };
+    uint32_t count = 12;
+    for (int i = 0; i < RB_BDPT_SPLIT_COUNT; i++)
+        uses[count++] = (struct rb_gpu_access){.image = &b->split[i], .use = RB_GPU_COMPUTE_READ};
+    for (int i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
+        uses[count++] =
+            (struct rb_gpu_access){.image = &b->accum[i], .use = RB_GPU_COMPUTE_READ_WRITE};
+    rb_integrator_pass_begin(it, cmd, "connect", uses, count);
+    rb_pass_bdpt_connect_record(d->passes, cmd, frame, b, k);
+    rb_integrator_pass_end(it, cmd);
+}
+
+static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
+                   const struct rb_frame_ctx *ctx)
+{
+    struct bdpt *d = state;
+    struct rb_bdpt_frame *b = &d->b;
+    struct rb_frame *frame = &it->frame;
+    const struct rb_gpu_image *gb = frame->gbuffer;
+    if (!rb_base_record_direct(it, &d->base, cmd, ctx))
+        return;
+    write_lights(it, b, ctx->moment);
+    record_rsm(it, d, cmd, ctx);
+
+    const struct rb_gpu_access bounds[] = {
+        {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &b->bounds, .use = RB_GPU_COMPUTE_READ_WRITE},
+    };
+    rb_integrator_pass_begin(it, cmd, "bounds", bounds, COUNT(bounds));
+    rb_pass_bdpt_bounds_record(d->passes, cmd, frame, b);
+    rb_integrator_pass_end(it, cmd);
+
+    const struct rb_gpu_access generate[] = {
+        {.buffer = &b->bounds, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &b->samples, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &frame->lights, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &b->lights, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &frame->shadow_views, .use = RB_GPU_COMPUTE_READ},
+        {.image = &b->rsm[0], .use = RB_GPU_COMPUTE_READ},
+        {.image = &b->rsm[1], .use = RB_GPU_COMPUTE_READ},
+        {.image = &b->rsm[3], .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &b->vpls, .use = RB_GPU_COMPUTE_WRITE},
+        {.buffer = &b->vpl_views, .use = RB_GPU_COMPUTE_WRITE},
+        {.buffer = &b->bundle_views, .use = RB_GPU_COMPUTE_WRITE},
+    };
+    rb_integrator_pass_begin(it, cmd, "generate", generate, COUNT(generate));
+    rb_pass_bdpt_generate_record(d->passes, cmd, frame, b);
+    rb_integrator_pass_end(it, cmd);
+
+    if (b->vpl_count) {
+        const struct rb_gpu_access vpl[] = {
+            {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
+            {.buffer = &b->vpl_views, .use = RB_GPU_GRAPHICS_READ},
+            {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
+            {.image = &b->vpl_maps, .use = RB_GPU_COLOR_ATTACHMENT},
+            {.image = &b->vpl_depth, .use = RB_GPU_DEPTH_ATTACHMENT},
+        };
+        rb_integrator_pass_begin(it, cmd, "vpl", vpl, COUNT(vpl));
+        rb_pass_view_record(d->views, cmd, frame, ctx->cur,
+                            &(struct rb_view_batch){
+                                .kind = RB_VIEW_KIND_PARABOLOID,
+                                .output = RB_VIEW_OUTPUT_DEPTH,
+                                .views = &b->vpl_views,
+                                .view_count = b->vpl_count,
+                                .targets = {&b->vpl_maps},
+                                .depth = &b->vpl_depth,
+                            });
+        rb_integrator_pass_end(it, cmd);
+    }
+
+    struct rb_gpu_access split[5 + RB_BDPT_SPLIT_COUNT + RB_BDPT_LIGHT_COUNT] = {
+        {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_NORMAL], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_SPECULAR], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_EMISSION], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_MOTION], .use = RB_GPU_COMPUTE_READ},
+    };
+    uint32_t count = 5;
+    for (int i = 0; i < RB_BDPT_SPLIT_COUNT; i++)
+        split[count++] = (struct rb_gpu_access){.image = &b->split[i], .use = RB_GPU_COMPUTE_WRITE};
+    for (int i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
+        split[count++] = (struct rb_gpu_access){.image = &b->accum[i], .use = RB_GPU_COMPUTE_WRITE};
+    rb_integrator_pass_begin(it, cmd, "split", split, count);
+    rb_pass_bdpt_split_record(d->passes, cmd, frame, b);
+    rb_integrator_pass_end(it, cmd);
+
+    uint32_t loops = b->vpl_count > b->bundle_count ? b->vpl_count : b->bundle_count;
+    for (uint32_t k = 0; k < loops; k++) {
+        if (k < b->bundle_count)
+            record_bundle(it, d, cmd, ctx, k);
+        record_connect(it, d, cmd, k);
+    }
+    if (b->bundle_count) /* the counters' copies, for collect */
+        rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
+                              VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
+                              VK_ACCESS_2_HOST_READ_BIT);
+
+    struct rb_gpu_access gather[2 * RB_BDPT_LIGHT_COUNT];
+    for (int i = 0; i < RB_BDPT_LIGHT_COUNT; i++) {
+        gather[2 * i] = (struct rb_gpu_access){.image = &b->accum[i], .use = RB_GPU_COMPUTE_READ};
+        gather[2 * i + 1] =
+            (struct rb_gpu_access){.image = &b->gathered[i], .use = RB_GPU_COMPUTE_WRITE};
+    }
+    rb_integrator_pass_begin(it, cmd, "gather", gather, COUNT(gather));
+    rb_pass_bdpt_gather_record(d->passes, cmd, frame, b);
+    rb_integrator_pass_end(it, cmd);
+
+    struct rb_gpu_access filter[2 + 2 * RB_BDPT_LIGHT_COUNT] = {
+        {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COMPUTE_READ},
+        {.image = &gb[RB_GB_NORMAL], .use = RB_GPU_COMPUTE_READ},
+    };
+    for (int i = 0; i < RB_BDPT_LIGHT_COUNT; i++) {
+        filter[2 + 2 * i] =
+            (struct rb_gpu_access){.image = &b->gathered[i], .use = RB_GPU_COMPUTE_READ};
+        filter[3 + 2 * i] =
+            (struct rb_gpu_access){.image = &b->filtered[i], .use = RB_GPU_COMPUTE_WRITE};
+    }
+    rb_integrator_pass_begin(it, cmd, "filter", filter, COUNT(filter));
+    rb_pass_bdpt_filter_record(d->passes, cmd, frame, b);
+    rb_integrator_pass_end(it, cmd);
+
+    rb_base_record_output(it, &d->base, cmd, b->filtered);
+}
+
+/* The ray-bundle pool's use, bundle by bundle: the most nodes a bundle asked for, and the
+ * fragments dropped because the pool was full (a warning here; the timing sidecar carries
+ * the numbers, and --strict makes them fatal). */
+static void collect(struct rb_integrator *it, void *state, struct rb_frame_result *out)
+{
+    const struct bdpt *d = state;
+    const struct rb_gpu_list_counter *usage = d->usage.mapped;
+    uint32_t most = 0, dropped = 0, overflowed = 0;
+    for (uint32_t k = 0; k < d->b.bundle_count; k++) {
+        if (usage[k].requested > most)
+            most = usage[k].requested;
+        dropped += usage[k].dropped;
+        overflowed += usage[k].dropped > 0;
+    }
+    out->nonfinite_count = rb_pass_output_nonfinite_count(d->base.output);
+    out->bundle_nodes_max = most;
+    out->bundle_nodes_capacity = d->b.bundle.capacity_nodes;
+    out->bundle_nodes_dropped = dropped;
+    if (dropped)
+        rb_log(RB_LOG_WARN,
+               "frame %d: the ray-bundle node buffer overflowed: %u of %u bundles dropped %u "
+               "fragments; a bundle needed up to %u nodes and the buffer holds %u (%u KiB); "
+               "raise integrator.bdpt.node_buffer_kib",
+               out->frame, overflowed, d->b.bundle_count, dropped, most, d->b.bundle.capacity_nodes,
+               it->job->integrator.bdpt.node_buffer_kib);
+}
+
+const struct rb_integrator_ops rb_integrator_bdpt = {
+    .name = "bdpt",
+    .history_frames = history_frames,
+    .create = create,
+    .record = record,
+    .collect = collect,
+    .destroy = destroy,
+};

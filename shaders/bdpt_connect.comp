@@ -1,0 +1,299 @@
+// bdpt, connect (seed 000, B.3; BDPT.md "Strategies"): iteration k of the frame's loop, over
+// the camera vertices x1 of one sub-image of the split G-buffer. With VPL k (a light subpath
+// light -> z) and bundle k (a direction d, its per-pixel lists):
+//   (a) z -> x1 through z's paraboloid shadow map: paths light -> z -> x1 (one bounce);
+//   (b) x1 -> z1, the nearest surface facing x1 along +-d (Program 1's search in x1's texel of
+//       the bundle), then z1 -> each light through its shadow map (the same one-bounce paths,
+//       from the other end), the environment when the ray escapes, z1's emission when it glows
+//       (light reaching x1 after one scattering: direct light);
+//   (c) z -> z1 through z's map, z1 -> x1 along the bundle: light -> z -> z1 -> x1 (two bounces).
+// (a) and (b)'s light connections make the same paths and are combined with the balance
+// heuristic over the sub-image's n_a VPLs and n_b bundles; (c) is the only strategy for its
+// paths. What reaches x1 is split into its BRDF's diffuse and specular parts (rb_brdf_parts)
+// and added, in k order and without atomics, to x1's own texel of four accumulators.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "bindings_shared.h"
+#include "shared.h"
+#include "view_shared.h"
+#include "bdpt_shared.h"
+#include "brdf.glsl"
+#include "encode.glsl"
+#include "lights.glsl"
+#include "view.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(std140, binding = RB_BIND_BDPT_CONNECT_GLOBALS) uniform Globals { rb_gpu_globals g; };
+layout(binding = RB_BIND_BDPT_CONNECT_SPLIT + 0, rgba32f) uniform readonly image2D s_position;
+layout(binding = RB_BIND_BDPT_CONNECT_SPLIT + 1, rgba32f) uniform readonly image2D s_normal;
+layout(binding = RB_BIND_BDPT_CONNECT_SPLIT + 2, rgba32f) uniform readonly image2D s_fresnel;
+layout(binding = RB_BIND_BDPT_CONNECT_SPLIT + 3, rgba32f) uniform readonly image2D s_geometric;
+layout(std430, binding = RB_BIND_BDPT_CONNECT_VPLS) readonly buffer Vpls { rb_gpu_vpl vpls[]; };
+layout(std430, binding = RB_BIND_BDPT_CONNECT_VPL_VIEWS) readonly buffer VplViews { rb_gpu_view vpl_views[]; };
+layout(binding = RB_BIND_BDPT_CONNECT_VPL_MAPS) uniform sampler2DArray vpl_maps;
+layout(std430, binding = RB_BIND_BDPT_CONNECT_BUNDLE_VIEWS) readonly buffer BundleViews { rb_gpu_view bundle_views[]; };
+layout(binding = RB_BIND_BDPT_CONNECT_HEADS, r32ui) uniform readonly uimage2DArray heads;
+layout(std430, binding = RB_BIND_BDPT_CONNECT_NODES) readonly buffer Nodes { rb_gpu_list_node nodes[]; };
+layout(std430, binding = RB_BIND_BDPT_CONNECT_LIGHTS) readonly buffer Lights { rb_gpu_light lights[]; };
+layout(std430, binding = RB_BIND_BDPT_CONNECT_BDPT_LIGHTS) readonly buffer BdptLights { rb_gpu_bdpt_light blights[]; };
+layout(std430, binding = RB_BIND_BDPT_CONNECT_SHADOW_VIEWS) readonly buffer Views { rb_gpu_shadow_view views[]; };
+layout(binding = RB_BIND_BDPT_CONNECT_SHADOW_MAPS) uniform sampler2DArray shadow_maps;
+layout(binding = RB_BIND_BDPT_CONNECT_ENV_MAP) uniform sampler2D env_map;
+layout(binding = RB_BIND_BDPT_CONNECT_LIGHT + RB_BDPT_DIRECT_DIFFUSE, rgba32f) uniform image2D a_direct_diffuse;
+layout(binding = RB_BIND_BDPT_CONNECT_LIGHT + RB_BDPT_DIRECT_SPECULAR, rgba32f) uniform image2D a_direct_specular;
+layout(binding = RB_BIND_BDPT_CONNECT_LIGHT + RB_BDPT_INDIRECT_DIFFUSE, rgba32f) uniform image2D a_indirect_diffuse;
+layout(binding = RB_BIND_BDPT_CONNECT_LIGHT + RB_BDPT_INDIRECT_SPECULAR, rgba32f) uniform image2D a_indirect_specular;
+layout(push_constant) uniform Push { rb_gpu_bdpt_connect_push pc; };
+
+#include "shadow.glsl"
+
+const uint NONE = 0xffffffffu;
+
+// The surface a bundle ray meets.
+struct hit {
+    bool found;
+    float t;        // distance from x1
+    vec3 n;         // shading normal, facing x1
+    rb_material m;
+};
+
+// Whether VPL k sees p (geometric normal ng) through its paraboloid map: p is lifted off its
+// surface by a texel's footprint along ng (at most 4 / size radians at the distance) and its
+// distance from the VPL's eye tested against the stored one with a bias of vpl_bias of it.
+float vpl_visibility(uint k, vec3 p, vec3 ng)
+{
+    rb_gpu_view v = vpl_views[k];
+    float far = v.origin.w, size = pc.params.y;
+    p += ng * (length(p - v.origin.xyz) * 4.0 / size);
+    vec3 q = (v.transform * vec4(p, 1.0)).xyz;
+    float len = length(q);
+    if (!(len > 0.0))
+        return 0.0;
+    vec3 w = q / len;
+    if (w.z <= 0.0)
+        return 0.0; // behind the VPL's hemisphere: it sends nothing there
+    float dist = len * far;
+    vec2 ndc = w.xy / (1.0 + w.z);
+    ivec2 t = clamp(ivec2(floor((ndc * 0.5 + 0.5) * size)), ivec2(0), ivec2(int(size) - 1));
+    float stored = texelFetch(vpl_maps, ivec3(t, int(k)), 0).r;
+    return dist * (1.0 - pc.params.x) <= stored ? 1.0 : 0.0;
+}
+
+// Whether node a comes before node b in the search's total order: nearer first, then by the
+// node's words, so that the order the nodes were appended in (which varies from run to run)
+// never changes the pick.
+bool before(rb_gpu_list_node a, rb_gpu_list_node b)
+{
+    if (a.depth != b.depth)
+        return a.depth < b.depth;
+    if (a.normal != b.normal)
+        return a.normal < b.normal;
+    if (a.albedo != b.albedo)
+        return a.albedo < b.albedo;
+    return a.gloss < b.gloss;
+}
+
+// Program 1 of seed 000: the nearest surface facing x1 along the bundle from x1, in either
+// direction. A node's depth carries its face in its sign (+ front: facing against the bundle's
+// direction d). Going along s d (s = +-1) from view depth z1, the surfaces that face x1 are the
+// nodes whose depth has the sign s, and they lie ahead where depth > s z1: the nearest is the
+// least such depth. x1's own surface faces the other way and is never picked.
+hit bundle_search(uint k, vec3 x1, float s)
+{
+    hit h;
+    h.found = false;
+    rb_gpu_view v = bundle_views[k];
+    int size = int(pc.params.z);
+    vec2 ndc = (v.transform * vec4(x1, 1.0)).xy;
+    ivec2 t = ivec2(floor((ndc * 0.5 + 0.5) * float(size)));
+    if (any(lessThan(t, ivec2(0))) || any(greaterThanEqual(t, ivec2(size))))
+        return h; // outside the fitted grid: cannot happen for a visible x1 (generate)
+    float key = s * rb_view_depth(v, RB_VIEW_ORTHOGRAPHIC, x1);
+    float eps = 0.5 * v.axis.w; // half a texel: the nodes' depths are taken at texel centres
+    uint i = imageLoad(heads, ivec3(t, 0)).r;
+    uint best = NONE;
+    rb_gpu_list_node b;
+    uint capacity = uint(pc.params.w);
+    for (uint step = 0u; i != NONE && i < capacity && step < capacity; step++) {
+        rb_gpu_list_node n = nodes[i];
+        if (n.depth * s > 0.0 && n.depth > key + eps && (best == NONE || before(n, b))) {
+            best = i;
+            b = n;
+        }
+        i = n.next;
+    }
+    if (best == NONE)
+        return h;
+    h.found = true;
+    h.t = b.depth - key;
+    h.n = rb_view_polar_decode(b.normal);
+    h.m = rb_material_unpack(uvec2(b.albedo, b.gloss));
+    return h;
+}
+
+vec3 environment(vec3 dir)
+{
+    vec3 env = g.env_color.rgb;
+    if (g.env.z > 0.5)
+        env = textureLod(env_map, rb_equirect_uv(dir, g.env.y), 0.0).rgb;
+    return env * g.env.x;
+}
+
+// A node's or VPL's BRDF: its diffuse colour and gray F0, F90 = 1 (rb_material_pack).
+vec3 surface_brdf(vec3 n, vec3 v, vec3 l, rb_material m)
+{
+    return rb_brdf(n, v, l, m.c_diff, vec3(m.spec), 1.0, m.roughness);
+}
+
+// Radiance VPL k sends from its surface towards p (normal n at p, facing the VPL), times the
+// cosine at p: f_z power G V, G = cos_z cos_p / r^2, clamped at the clamp when one is set.
+vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, out vec3 l, out float r2)
+{
+    rb_gpu_vpl z = vpls[k];
+    vec3 d = z.position.xyz - p;
+    r2 = dot(d, d);
+    l = d * inversesqrt(max(r2, 1e-20));
+    float cos_p = dot(n, l), cos_z = -dot(z.normal.xyz, l);
+    if (cos_p <= 0.0 || cos_z <= 0.0 || dot(ng, l) <= 0.0)
+        return vec3(0.0);
+    float geo = cos_p * cos_z / max(r2, 1e-20);
+    if (clamp_g && pc.counts.w > 0.0)
+        geo = min(geo, pc.counts.w);
+    if (vpl_visibility(k, p, ng) <= 0.0)
+        return vec3(0.0);
+    uint kind = uint(z.from.w);
+    vec3 to_light =
+        kind == RB_KIND_DIRECTIONAL ? z.from.xyz : normalize(z.from.xyz - z.position.xyz);
+    rb_material m = rb_material_unpack(z.material.xy);
+    return surface_brdf(z.normal.xyz, -l, to_light, m) * z.power.rgb * geo;
+}
+
+// The light z1 reflects towards x1 (direction v) from the punctual lights, each weighted
+// against VPLs finding z1 (pdf_bundle: the bundle's area density of z1 seen from x1).
+vec3 from_lights(vec3 z1, vec3 n, vec3 v, rb_material m, float pdf_bundle)
+{
+    vec3 sum = vec3(0.0);
+    for (uint j = 0u; j < g.size.z; j++) {
+        rb_gpu_light L = lights[j];
+        uint kind = uint(L.position.w);
+        vec3 l;
+        float atten, dist2 = 1.0;
+        if (kind == RB_KIND_DIRECTIONAL) {
+            l = -L.direction.xyz;
+            atten = 1.0;
+        } else {
+            vec3 d = L.position.xyz - z1;
+            dist2 = dot(d, d);
+            float dist = sqrt(dist2);
+            l = d / max(dist, 1e-8);
+            atten = rb_light_falloff(dist, L.direction.w);
+            if (kind == RB_KIND_SPOT)
+                atten *= rb_spot_factor(L.direction.xyz, -l, L.cone.xy);
+        }
+        float cos_z = dot(n, l);
+        if (cos_z <= 0.0 || atten <= 0.0)
+            continue;
+        int first = int(L.color.w);
+        float vis = 1.0, w = 1.0;
+        if (first >= 0) {
+            uint layer = uint(first) + (kind == RB_KIND_POINT ? rb_cube_face(-l) : 0u);
+            vis = shadow_visibility(layer, z1, n, cos_z);
+            // VPLs come from shadowed lights only (generate): weigh against them.
+            vec4 c = blights[j].choice;
+            float pdf_vpl = c.x * c.z * cos_z / (kind == RB_KIND_DIRECTIONAL ? 1.0 : dist2);
+            if (pc.index.w == RB_BDPT_MIS)
+                w = pc.counts.y * pdf_bundle / (pc.counts.y * pdf_bundle + pc.counts.x * pdf_vpl);
+        }
+        if (vis <= 0.0)
+            continue;
+        sum += w * vis * surface_brdf(n, v, l, m) * L.color.rgb * atten * cos_z;
+    }
+    return sum;
+}
+
+void add(inout vec3 diffuse, inout vec3 specular, vec3 n, vec3 v, vec3 l, vec3 f0, float f90,
+         float rough, vec3 x)
+{
+    vec3 kd, ks;
+    rb_brdf_parts(n, v, l, f0, f90, rough, kd, ks);
+    diffuse += kd * x;
+    specular += ks * x;
+}
+
+void main()
+{
+    uvec2 local = gl_GlobalInvocationID.xy;
+    if (any(greaterThanEqual(local, pc.region.zw)))
+        return;
+    ivec2 sp = ivec2(pc.region.xy + local);
+    vec4 pos = imageLoad(s_position, sp);
+    if (pos.w <= 0.0)
+        return;
+    vec3 x1 = pos.xyz;
+    vec4 nr = imageLoad(s_normal, sp);
+    vec4 fr = imageLoad(s_fresnel, sp);
+    vec3 n1 = nr.xyz, f0 = fr.rgb, v1 = normalize(g.camera_pos.xyz - x1);
+    vec3 ng1 = rb_oct_decode(imageLoad(s_geometric, sp).xy);
+    float rough = nr.w, f90 = fr.a;
+    uint k = pc.index.x, strategies = pc.index.w;
+    bool has_vpl = pc.index.y != 0u && vpls[k].position.w > 0.0, has_bundle = pc.index.z != 0u;
+    float n_a = pc.counts.x, n_b = pc.counts.y, n_c = pc.counts.z;
+    vec3 dd = vec3(0.0), ds = vec3(0.0), id = vec3(0.0), is = vec3(0.0);
+
+    // (a) VPL k -> x1.
+    if (has_vpl && strategies != RB_BDPT_BUNDLE) {
+        vec3 l;
+        float r2;
+        vec3 x = from_vpl(k, x1, n1, ng1, strategies == RB_BDPT_VPL, l, r2);
+        if (any(greaterThan(x, vec3(0.0)))) {
+            float w = 1.0;
+            if (strategies == RB_BDPT_MIS) {
+                float pdf_vpl = vpls[k].normal.w;
+                float pdf_bundle = -dot(vpls[k].normal.xyz, l) / (2.0 * RB_PI * r2);
+                w = n_a * pdf_vpl / (n_a * pdf_vpl + n_b * pdf_bundle);
+            }
+            add(id, is, n1, v1, l, f0, f90, rough, x * (w / n_a));
+        }
+    }
+
+    // (b) and (c) along bundle k: the direction leaves x1 on its geometric front side, uniform
+    // over that hemisphere (pdf 1 / 2 pi).
+    if (has_bundle) {
+        vec3 d = bundle_views[k].axis.xyz;
+        float s = dot(ng1, d) >= 0.0 ? 1.0 : -1.0;
+        vec3 dir = s * d;
+        float cos1 = dot(n1, dir);
+        if (cos1 > 0.0) {
+            hit h = bundle_search(k, x1, s);
+            float scale = cos1 * 2.0 * RB_PI;
+            if (!h.found) {
+                add(dd, ds, n1, v1, dir, f0, f90, rough, environment(dir) * (scale / n_b));
+            } else {
+                vec3 z1 = x1 + dir * h.t, nz = h.n;
+                if (dot(nz, dir) > 0.0)
+                    nz = -nz;
+                if (any(greaterThan(h.m.emission, vec3(0.0))))
+                    add(dd, ds, n1, v1, dir, f0, f90, rough, h.m.emission * (scale / n_b));
+                float cos_in = -dot(nz, dir);
+                if (strategies != RB_BDPT_VPL && cos_in > 0.0) {
+                    float pdf_bundle = cos_in / (2.0 * RB_PI * h.t * h.t);
+                    vec3 x = from_lights(z1, nz, -dir, h.m, pdf_bundle);
+                    add(id, is, n1, v1, dir, f0, f90, rough, x * (scale / n_b));
+                }
+                if (has_vpl && n_c > 0.0) {
+                    vec3 l;
+                    float r2;
+                    vec3 x = from_vpl(k, z1, nz, nz, true, l, r2);
+                    x *= surface_brdf(nz, -dir, l, h.m);
+                    add(id, is, n1, v1, dir, f0, f90, rough, x * (scale / n_c));
+                }
+            }
+        }
+    }
+
+    imageStore(a_direct_diffuse, sp, imageLoad(a_direct_diffuse, sp) + vec4(dd, 0.0));
+    imageStore(a_direct_specular, sp, imageLoad(a_direct_specular, sp) + vec4(ds, 0.0));
+    imageStore(a_indirect_diffuse, sp, vec4(imageLoad(a_indirect_diffuse, sp).rgb + id, 1.0));
+    imageStore(a_indirect_specular, sp, imageLoad(a_indirect_specular, sp) + vec4(is, 0.0));
+}

@@ -1,0 +1,63 @@
+// bdpt, filter (seed 000, A.1; Segovia et al. 2006): the geometry-aware filter that combines the
+// neighbouring pixels' sample subsets. A pixel averages the gathered light of the pixels within
+// the radius that saw samples (w of the indirect diffuse image: 1) and lie on the same surface:
+// their view depths differ by at most the depth threshold (relative) and their normals by an
+// angle whose cosine is at least the normal threshold. Every weight is 0 or 1, and the sum runs
+// in a fixed order, so the result does not depend on scheduling.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "bindings_shared.h"
+#include "shared.h"
+#include "bdpt_shared.h"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(binding = RB_BIND_BDPT_FILTER_GB_POSITION, rgba32f) uniform readonly image2D gb_position;
+layout(binding = RB_BIND_BDPT_FILTER_GB_NORMAL, rgba32f) uniform readonly image2D gb_normal;
+layout(binding = RB_BIND_BDPT_FILTER_IN + 0, rgba32f) uniform readonly image2D i0;
+layout(binding = RB_BIND_BDPT_FILTER_IN + 1, rgba32f) uniform readonly image2D i1;
+layout(binding = RB_BIND_BDPT_FILTER_IN + 2, rgba32f) uniform readonly image2D i2;
+layout(binding = RB_BIND_BDPT_FILTER_IN + 3, rgba32f) uniform readonly image2D i3;
+layout(binding = RB_BIND_BDPT_FILTER_OUT + 0, rgba32f) uniform writeonly image2D o0;
+layout(binding = RB_BIND_BDPT_FILTER_OUT + 1, rgba32f) uniform writeonly image2D o1;
+layout(binding = RB_BIND_BDPT_FILTER_OUT + 2, rgba32f) uniform writeonly image2D o2;
+layout(binding = RB_BIND_BDPT_FILTER_OUT + 3, rgba32f) uniform writeonly image2D o3;
+layout(push_constant) uniform Push { rb_gpu_bdpt_image_push pc; };
+
+void main()
+{
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 size = imageSize(gb_position);
+    if (any(greaterThanEqual(px, size)))
+        return;
+    vec4 p = imageLoad(gb_position, px);
+    vec3 s0 = vec3(0.0), s1 = vec3(0.0), s2 = vec3(0.0), s3 = vec3(0.0);
+    float count = 0.0;
+    if (p.w > 0.0) {
+        vec3 n = imageLoad(gb_normal, px).xyz;
+        int r = int(pc.split.w);
+        for (int dy = -r; dy <= r; dy++)
+            for (int dx = -r; dx <= r; dx++) {
+                ivec2 q = px + ivec2(dx, dy);
+                if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size)))
+                    continue;
+                vec4 c2 = imageLoad(i2, q);
+                if (c2.w <= 0.0)
+                    continue;
+                float z = imageLoad(gb_position, q).w;
+                if (!(abs(z - p.w) <= pc.stops.x * p.w) ||
+                    dot(imageLoad(gb_normal, q).xyz, n) < pc.stops.y)
+                    continue;
+                s0 += imageLoad(i0, q).rgb;
+                s1 += imageLoad(i1, q).rgb;
+                s2 += c2.rgb;
+                s3 += imageLoad(i3, q).rgb;
+                count += 1.0;
+            }
+    }
+    float inv = count > 0.0 ? 1.0 / count : 0.0;
+    imageStore(o0, px, vec4(s0 * inv, 0.0));
+    imageStore(o1, px, vec4(s1 * inv, 0.0));
+    imageStore(o2, px, vec4(s2 * inv, count));
+    imageStore(o3, px, vec4(s3 * inv, 0.0));
+}
