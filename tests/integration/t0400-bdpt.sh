@@ -1,0 +1,100 @@
+#!/bin/sh
+# The bdpt integrator (seed 000): it renders validation-clean, its timing sidecar names every
+# pass of the seed's pipeline, its output is the same bits whatever lavapipe's thread count, a
+# full ray-bundle node buffer is reported (warning, sidecar flag, exit 1 under --strict), and
+# its indirect light converges to the reference's bdpt path space as VPLs and bundles are added,
+# by each strategy alone and by MIS.
+. tests/integration/lib.sh
+
+small="--frames 0 --size 64x36 -q"
+maps="--set integrator.bdpt.vpl_size=64 --set integrator.bdpt.rsm_size=64"
+k() { # k N: N VPLs and N bundles
+    echo "--set integrator.bdpt.vpls=$1 --set integrator.bdpt.bundles=$1"
+}
+
+# shellcheck disable=SC2046
+rb render jobs/demo.yaml $small $maps --integrator bdpt --out "$T/b"
+expect_exit 0 "bdpt renders a demo frame"
+timing="$T/b/frame.0000.timing.json"
+for pass in animate gbuffer shadow direct rsm bounds generate vpl split bundle connect gather \
+    filter output; do
+    check "the timing sidecar names the $pass pass" grep -q "\"name\": \"$pass\"" "$timing"
+done
+check "21 bundles and 21 connections a frame" \
+    sh -c "grep -q '\"bundle\".*\"count\": 21' '$timing' && grep -q '\"connect\".*\"count\": 21' '$timing'"
+check "the sidecar reports the node buffer, not overflowed" \
+    grep -q '"bundle_nodes": {"max": [1-9][0-9]*, "capacity": 1048576, "dropped": 0, "overflow": false}' "$timing"
+oiiotool --info -v "$T/b/frame.0000.exr" >"$T/info" 2>&1
+check "the EXR says integrator bdpt" grep -qF 'raybundle:integrator: "bdpt"' "$T/info"
+tap_run "$BUILD/tests/tools/exrstat" "$T/b/frame.0000.exr" indirect.G 0.01
+
+# Determinism: lavapipe's thread count changes the order fragments reach the bundles' lists;
+# the search's total order keeps the pixels the same.
+LP_NUM_THREADS=1 rb render jobs/demo.yaml $small $maps --integrator bdpt --out "$T/t1"
+expect_exit 0 "bdpt with one lavapipe thread"
+LP_NUM_THREADS=4 rb render jobs/demo.yaml $small $maps --integrator bdpt --out "$T/t4"
+expect_exit 0 "bdpt with four lavapipe threads"
+check "1 and 4 threads give identical bits" cmp -s "$T/t1/frame.0000.exr" "$T/t4/frame.0000.exr"
+check "a second run gives identical bits" cmp -s "$T/t1/frame.0000.exr" "$T/b/frame.0000.exr"
+
+# Overflow: never silent (without -q, which silences warnings).
+rb render jobs/demo.yaml --frames 0 --size 64x36 $maps --integrator bdpt --out "$T/o" \
+    --set integrator.bdpt.node_buffer_kib=4
+expect_exit 0 "a tiny node buffer still renders"
+stderr_has "the ray-bundle node buffer overflowed" "a tiny node buffer is a warning"
+stderr_has "the buffer holds 204 (4 KiB)" "the warning gives the counts"
+check "the sidecar flags the overflow" \
+    grep -q '"capacity": 204, "dropped": [1-9][0-9]*, "overflow": true' "$T/o/frame.0000.timing.json"
+rb render jobs/demo.yaml $small $maps --integrator bdpt --out "$T/s" \
+    --set integrator.bdpt.node_buffer_kib=4 --strict
+expect_exit 1 "--strict makes an overflow exit 1"
+stderr_has "--strict makes that an error" "--strict says why"
+check "--strict writes nothing of the failed frame" test ! -e "$T/s/frame.0000.exr"
+
+# Accuracy: the reference in bdpt's path space, against bdpt with more and more samples.
+rb reference jobs/demo.yaml $small --spp 512 --set integrator.reference.paths=bdpt --out "$T/r"
+expect_exit 0 "the reference renders bdpt's path space"
+relmse() { # relmse DIR: the indirect layer's relMSE against the reference
+    "$RB" compare "$1/frame.0000.exr" "$T/r/frame.0000.exr" --layer indirect --json |
+        sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p'
+}
+mean() { # mean DIR: the indirect layer's mean green
+    oiiotool "$1/frame.0000.exr" --ch indirect.G --printstats 2>/dev/null |
+        sed -n 's/.*Stats Avg: \([0-9.e+-]*\).*/\1/p'
+}
+for count in 8 128; do # (not n: lib.sh's test counter)
+    # shellcheck disable=SC2046
+    rb render jobs/demo.yaml $small $maps --integrator bdpt $(k $count) --out "$T/k$count"
+    expect_exit 0 "bdpt with $count VPLs and bundles"
+done
+e8=$(relmse "$T/k8")
+e128=$(relmse "$T/k128")
+echo "# indirect relMSE against the reference: 8 VPLs/bundles $e8, 128: $e128"
+check "indirect light converges: 128 samples have under half the relMSE of 8 ($e128 < $e8 / 2)" \
+    awk "BEGIN { exit !($e128 < $e8 / 2) }"
+check "with 128 samples the indirect relMSE is under 0.05 ($e128)" awk "BEGIN { exit !($e128 < 0.05) }"
+mr=$(mean "$T/r")
+for s in mis vpl bundle; do
+    # shellcheck disable=SC2046
+    rb render jobs/demo.yaml $small $maps --integrator bdpt $(k 128) --out "$T/$s" \
+        --set integrator.bdpt.strategies=$s
+    expect_exit 0 "bdpt with strategies $s"
+    m=$(mean "$T/$s")
+    echo "# strategies $s: mean indirect green $m, the reference's $mr"
+    check "strategies $s: the mean indirect light is within 10% of the reference's ($m, $mr)" \
+        awk "BEGIN { d = $m - $mr; if (d < 0) d = -d; exit !(d < 0.1 * $mr) }"
+done
+check "MIS has the lowest relMSE of the three strategies" \
+    awk "BEGIN { exit !($(relmse "$T/mis") <= $(relmse "$T/vpl") && $(relmse "$T/mis") <= $(relmse "$T/bundle")) }"
+
+# The area-lit Cornell box: lit by its emissive quad alone, through the bundles.
+if have_scene cornell-box/CornellBox.glb; then
+    rb render "$SCENES/cornell-box/CornellBox.glb" $small $maps --out "$T/c"
+    expect_exit 0 "a quick look at the Cornell box renders (with bdpt)"
+    check "the quick look used bdpt" grep -q '"integrator": "bdpt"' "$T/c/frame.0000.timing.json"
+    tap_run "$BUILD/tests/tools/exrstat" "$T/c/frame.0000.exr" direct.G 0.02
+else
+    skip "the Cornell box renders lit" "$SCENES/cornell-box/CornellBox.glb is not there"
+fi
+
+done_testing
