@@ -22,7 +22,8 @@ endif
 PKGS := vulkan OpenImageIO OpenColorIO yaml-0.1 tinygltf libxxhash
 # Deferred (=), so a fresh machine gets them after scripts/install-deps.sh has run.
 PKG_CFLAGS = $(shell $(PKG_CONFIG) --cflags $(PKGS) 2>/dev/null)
-PKG_LIBS = $(shell $(PKG_CONFIG) --libs $(PKGS) 2>/dev/null) -lembree3 -lpthread -lm
+# Embree and meshoptimizer ship no pkg-config file in Debian 12.
+PKG_LIBS = $(shell $(PKG_CONFIG) --libs $(PKGS) 2>/dev/null) -lembree3 -lmeshoptimizer -lpthread -lm
 
 WARN := -Wall -Wextra -Wpedantic -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Werror=vla
 CXXWARN := -Wall -Wextra
@@ -146,7 +147,8 @@ FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-fra
 FUZZ_SAN_SRC := $(filter lib/core/% lib/job/% lib/scene/%,$(LIB_C) $(LIB_CXX))
 FUZZ_SAN_OBJ := $(patsubst %,$(BUILD)/asan/%.o,$(basename $(FUZZ_SAN_SRC)))
 FUZZ_SAN_BIN := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/asan/tests/fuzz/%)
-FUZZ_SAN_LIBS = $(shell $(PKG_CONFIG) --libs yaml-0.1 tinygltf libxxhash 2>/dev/null) -lm
+FUZZ_SAN_LIBS = $(shell $(PKG_CONFIG) --libs yaml-0.1 tinygltf libxxhash 2>/dev/null) \
+	-lmeshoptimizer -lm
 FUZZ_SAN_DEPS := $(FUZZ_SAN_OBJ:.o=.d) $(FUZZ_SAN_BIN:=.d) $(BUILD)/asan/tests/fuzz/replay.d
 
 $(BUILD)/asan/.flags: FORCE

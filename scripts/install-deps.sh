@@ -10,7 +10,7 @@ glslang-tools spirv-tools
 libopenimageio-dev openimageio-tools
 libopencolorio-dev opencolorio-tools
 libtinygltf-dev nlohmann-json3-dev
-libembree-dev
+libembree-dev libmeshoptimizer-dev
 libyaml-dev libxxhash-dev
 libcmocka-dev
 mandoc man-db time clang-format

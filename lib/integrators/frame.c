@@ -299,6 +299,102 @@ static enum rb_status upload_geometry(struct rb_gpu *gpu, const struct rb_scene 
     return st;
 }
 
+/* The simplified mesh the bdpt integrator's many small views draw (integrator.bdpt.view_triangles;
+ * LAVAPIPE.md on why): the budget is split over the instances in proportion to their triangles
+ * (rb_scene_simplify_targets), so every instance of a primitive gets the same target and the
+ * primitive is simplified once, in its bind pose: the file's positions, the vertices the animate
+ * pass skins and morphs for every index buffer alike. Other integrators, a budget of 0 and one
+ * the scene fits in leave view_indices empty: the views draw the full index buffer. */
+static enum rb_status upload_view_indices(struct rb_gpu *gpu, const struct rb_job *job,
+                                          const struct rb_scene *scene,
+                                          const struct rb_scene_pose *pose, struct rb_frame *frame,
+                                          struct rb_err *err)
+{
+    uint64_t budget = job->integrator.bdpt.view_triangles;
+    uint32_t full = frame->index_count / 3, n = pose->instance_count;
+    frame->view_index_count = frame->index_count;
+    if (job->integrator.name != RB_INTEGRATOR_BDPT || budget == 0 || budget >= full)
+        return RB_OK;
+    uint32_t *triangles = malloc(sizeof(uint32_t) * n);
+    uint32_t *targets = malloc(sizeof(uint32_t) * n);
+    uint32_t *done = malloc(sizeof(uint32_t) * scene->primitive_count); /* target, or NONE */
+    uint32_t *counts = malloc(sizeof(uint32_t) * scene->primitive_count);
+    uint32_t *local = malloc(sizeof(uint32_t) * scene->index_count); /* as scene->indices */
+    uint32_t *indices = NULL;
+    enum rb_status st = RB_OK;
+    if (!triangles || !targets || !done || !counts || !local) {
+        st = rb_errf(err, RB_E_NOMEM, "out of memory for the simplified mesh");
+        goto out;
+    }
+    for (uint32_t i = 0; i < n; i++)
+        triangles[i] = scene->primitives[pose->instances[i].primitive].index_count / 3;
+    rb_scene_simplify_targets(triangles, n, budget, targets);
+    memset(done, 0xff, sizeof(uint32_t) * scene->primitive_count);
+    uint64_t total = 0;                             /* indices */
+    uint32_t drawn = 0, simplified = 0, sloppy = 0; /* primitives */
+    float worst = 0.0f;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t pi = pose->instances[i].primitive;
+        const struct rb_scene_primitive *p = &scene->primitives[pi];
+        if (done[pi] == RB_SCENE_NONE && p->index_count) {
+            const struct rb_scene_vertex *v = &scene->vertices[p->first_vertex];
+            struct rb_scene_simplified r;
+            st = rb_scene_simplify(
+                &(struct rb_scene_simplify_mesh){.positions = v->position,
+                                                 .normals = v->normal,
+                                                 .stride_bytes = sizeof(*v),
+                                                 .vertex_count = p->vertex_count,
+                                                 .indices = &scene->indices[p->first_index],
+                                                 .index_count = p->index_count},
+                targets[i], &local[p->first_index], &r, err);
+            if (st) {
+                rb_err_prefix(err, "simplifying primitive %u", pi);
+                goto out;
+            }
+            counts[pi] = r.index_count;
+            drawn++;
+            simplified += r.index_count < p->index_count;
+            sloppy += r.is_sloppy;
+            worst = r.error > worst ? r.error : worst;
+        } else if (done[pi] == RB_SCENE_NONE) {
+            counts[pi] = 0;
+        } else if (done[pi] != targets[i]) {
+            RB_BUG("instances of primitive %u with targets %u and %u", pi, done[pi], targets[i]);
+        }
+        done[pi] = targets[i];
+        total += counts[pi];
+    }
+    indices = malloc(sizeof(uint32_t) * (total ? total : 1));
+    if (!indices) {
+        st = rb_errf(err, RB_E_NOMEM, "out of memory for %llu indices", (unsigned long long)total);
+        goto out;
+    }
+    uint32_t dst = 0, k = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t pi = pose->instances[i].primitive;
+        for (uint32_t j = 0; j < counts[pi]; j++)
+            indices[k++] = dst + local[scene->primitives[pi].first_index + j];
+        dst += scene->primitives[pi].vertex_count;
+    }
+    frame->view_index_count = (uint32_t)total;
+    st = upload_buffer(gpu, indices, total * sizeof(uint32_t), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+                       "indices.view", &frame->view_indices, err);
+    if (st == RB_OK)
+        rb_log(RB_LOG_INFO,
+               "view mesh: %llu of %u triangles for a budget of %llu (%u of %u primitives "
+               "simplified, %u sloppily); largest error %.3g of a primitive's size",
+               (unsigned long long)total / 3, full, (unsigned long long)budget, simplified, drawn,
+               sloppy, (double)worst);
+out:
+    free(indices);
+    free(local);
+    free(counts);
+    free(done);
+    free(targets);
+    free(triangles);
+    return st;
+}
+
 static enum rb_status make_image(struct rb_gpu *gpu, uint32_t w, uint32_t h, uint32_t layers,
                                  VkFormat format, VkImageUsageFlags usage, bool layer_views,
                                  const char *name, struct rb_gpu_image *out, struct rb_err *err)
@@ -432,6 +528,8 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
     if (st == RB_OK)
         st = upload_geometry(gpu, scene, first->pose, frame, err);
     if (st == RB_OK)
+        st = upload_view_indices(gpu, job, scene, first->pose, frame, err);
+    if (st == RB_OK)
         st = upload_materials(gpu, scene, frame, err);
     if (st == RB_OK)
         st = upload_textures(gpu, scene, frame, err);
@@ -539,6 +637,7 @@ void rb_frame_release(struct rb_gpu *gpu, struct rb_frame *frame)
     rb_gpu_buffer_release(gpu, &frame->materials);
     rb_gpu_buffer_release(gpu, &frame->morph_deltas);
     rb_gpu_buffer_release(gpu, &frame->src_vertices);
+    rb_gpu_buffer_release(gpu, &frame->view_indices);
     rb_gpu_buffer_release(gpu, &frame->indices);
     rb_gpu_buffer_release(gpu, &frame->globals);
     memset(frame, 0, sizeof(*frame));

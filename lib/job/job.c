@@ -211,7 +211,7 @@ static const struct key keys[] = {
     K("integrator.bdpt.vpl_bias", KT_FLOAT, JOB(integrator.bdpt.vpl_bias), 0, NOHI, "0.01", 0,
       "bdpt: VPL shadow-map depth bias as a fraction of the distance to the VPL"),
     K("integrator.bdpt.view_triangles", KT_UINT, JOB(integrator.bdpt.view_triangles), 0, UINT32_MAX,
-      "0", 0,
+      "50000", 0,
       "bdpt: triangle budget of the simplified mesh the small views draw; 0: the full mesh"),
     K("integrator.bdpt.strategies", KT_ENUM, JOB(integrator.bdpt.strategies), NOLO, NOHI, "mis", 0,
       "bdpt: mis weights VPL and bundle strategies; vpl or bundle use one alone",

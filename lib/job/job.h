@@ -141,7 +141,7 @@ struct rb_job {
                                         * scene's diagonal squared; 0: none; default 100 */
             float vpl_bias;            /* VPL shadow-map depth bias, fraction of distance */
             uint32_t view_triangles;   /* triangle budget of the small views' simplified mesh;
-                                        * 0: the full mesh */
+                                        * 0: the full mesh; default 50000 */
             enum rb_bdpt_strategies strategies;
         } bdpt;
         struct {

@@ -50,6 +50,13 @@ struct rb_frame {
     struct rb_gpu_buffer morph_deltas; /* struct rb_scene_morph_delta */
     struct rb_gpu_buffer indices;      /* uint32, into the world vertex buffers */
     uint32_t index_count;
+
+    /* The simplified mesh of the small views (integrator.bdpt.view_triangles), into the same
+     * world vertices; no buffer (VK_NULL_HANDLE) when it would be the full mesh, and then
+     * view_index_count is index_count. */
+    struct rb_gpu_buffer view_indices;
+    uint32_t view_index_count;
+
     struct rb_gpu_buffer materials;                     /* struct rb_gpu_material */
     struct rb_gpu_image srgb_textures, linear_textures; /* RGBA8 arrays, one layer a texture */
 
@@ -172,6 +179,11 @@ struct rb_view_batch {
     const struct rb_view_list *list;  /* list: its heads have the layers */
     float intensity[3]; /* rsm: radiant intensity in W/sr (perspective) or irradiance in W/m^2
                          * across the beam (orthographic) of the light the view looks from */
+
+    /* Draw frame->view_indices, the simplified mesh, rather than frame->indices (the same
+     * when the frame has none). Off by default: the shadow pass and full-size views keep the
+     * full mesh, bit for bit. */
+    bool use_simplified;
 };
 
 struct rb_pass_view;
@@ -179,9 +191,10 @@ struct rb_pass_view;
  * does not draw (a paraboloid view's rsm or list output), RB_E_VULKAN as Vulkan does. */
 enum rb_status rb_pass_view_create(struct rb_gpu *gpu, const struct rb_pass_view_desc *desc,
                                    struct rb_pass_view **out, struct rb_err *err);
-/* Draws frame->indices over slot->vertices into each view of the batch: depth and rsm clear
- * their target layers first; a list batch clears its layers' heads and resets the node pool,
- * which its views then share. The batch's pair must be one the pass was created with. */
+/* Draws frame->indices (frame->view_indices for batch->use_simplified) over slot->vertices
+ * into each view of the batch: depth and rsm clear their target layers first; a list batch
+ * clears its layers' heads and resets the node pool, which its views then share. The batch's
+ * pair must be one the pass was created with. */
 void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const struct rb_frame *frame,
                          const struct rb_frame_slot *slot, const struct rb_view_batch *batch);
 void rb_pass_view_destroy(struct rb_pass_view *p);

@@ -302,8 +302,12 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
     p->gpu->push_descriptor_set(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p->layout.pipeline_layout, 0,
                                 w.count, w.w);
-    if (frame->index_count)
-        vkCmdBindIndexBuffer(cmd, frame->indices.buffer, 0, VK_INDEX_TYPE_UINT32);
+    /* The simplified mesh when asked for and the frame has one; the full mesh otherwise. */
+    bool is_simplified = batch->use_simplified && frame->view_indices.buffer;
+    const struct rb_gpu_buffer *indices = is_simplified ? &frame->view_indices : &frame->indices;
+    uint32_t index_count = is_simplified ? frame->view_index_count : frame->index_count;
+    if (index_count)
+        vkCmdBindIndexBuffer(cmd, indices->buffer, 0, VK_INDEX_TYPE_UINT32);
     VkViewport vp = {0, 0, (float)width, (float)height, 0.0f, 1.0f};
     VkRect2D area = {{0, 0}, {width, height}};
     uint32_t color_count = output == RB_VIEW_OUTPUT_DEPTH ? 1
@@ -352,8 +356,8 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
                            &push);
         vkCmdSetViewport(cmd, 0, 1, &vp);
         vkCmdSetScissor(cmd, 0, 1, &area);
-        if (frame->index_count) /* an empty scene still clears its layers */
-            vkCmdDrawIndexed(cmd, frame->index_count, 1, 0, 0, 0);
+        if (index_count) /* an empty scene still clears its layers */
+            vkCmdDrawIndexed(cmd, index_count, 1, 0, 0, 0);
         vkCmdEndRendering(cmd);
     }
     /* The counters are read on the host after the submit. */

@@ -362,4 +362,56 @@ enum rb_status rb_scene_select_clips(const struct rb_scene *scene, const struct 
                                      uint32_t *out, uint32_t cap, uint32_t *count,
                                      struct rb_err *err);
 
+/* ---- simplify.c: a coarser mesh for views that can do with less ---------------------------- */
+
+/* The fewest triangles a mesh keeps under any budget (all of them when it has fewer): a closed
+ * box's worth, so that a small object stays a solid in the views that draw the simplified mesh
+ * rather than vanishing from them. */
+#define RB_SCENE_SIMPLIFY_MIN_TRIANGLES 12
+
+/* Splits budget_triangles over count meshes of triangles[i] triangles in proportion to their
+ * size: targets[i] = floor(budget * triangles[i] / total), in 64-bit integers (total is the sum
+ * of triangles), raised to min(triangles[i], RB_SCENE_SIMPLIFY_MIN_TRIANGLES). A budget of 0 or
+ * of at least the total keeps every mesh whole (targets[i] = triangles[i]). Equal meshes get
+ * equal targets. Returns the sum of the targets: at most the budget plus what the minimum added. */
+uint64_t rb_scene_simplify_targets(const uint32_t *triangles, uint32_t count,
+                                   uint64_t budget_triangles, uint32_t *targets);
+
+/* A triangle mesh to simplify: only positions count, so vertices that share a position are one
+ * (UV and normal seams do not hold the simplifier back). */
+struct rb_scene_simplify_mesh {
+    const float *positions; /* x, y, z of vertex 0; vertex i's stride_bytes * i further on */
+    const float *normals;   /* NULL, or x, y, z at the same stride: each corner of a simplified
+                             * triangle then takes, of the vertices at its position, the one whose
+                             * normal is closest to the triangle's (hard edges keep their normals) */
+    size_t stride_bytes;    /* at least 12 and a multiple of 4 */
+    uint32_t vertex_count;
+    const uint32_t *indices; /* a triangle list into the vertices */
+    uint32_t index_count;
+};
+
+/* What rb_scene_simplify made. */
+struct rb_scene_simplified {
+    uint32_t index_count; /* written to out; a multiple of 3 */
+    float error;          /* meshoptimizer's error: the geometric deviation relative to the
+                           * mesh's extent (0: the shape is kept exactly) */
+    bool is_sloppy;       /* meshopt_simplifySloppy's result (see rb_scene_simplify) */
+};
+
+/* Simplifies mesh to at most target_triangles triangles into out (the caller's, room for
+ * mesh->index_count indices), indexing the same vertices, deterministically (the same input
+ * gives the same indices). A target of at least the mesh's triangle count copies the indices.
+ * Otherwise meshopt_simplify collapses edges of the mesh welded by position (one vertex per
+ * distinct position) with no bound on the error; when topology stops it above the target
+ * (non-manifold edges), the grid-based meshopt_simplifySloppy runs on the same welded mesh,
+ * and its result is taken when it is not empty and smaller; otherwise the edge collapses'
+ * result stands, over the target. A mesh that both would leave empty is kept whole. Edge
+ * collapses may still remove a small closed part of a mesh (a tetrahedron collapses to
+ * nothing); the error then says how far. Fails with RB_E_INVALID for an index out of range or
+ * a count not a multiple of 3 and RB_E_NOMEM; meshoptimizer itself aborts the process if it
+ * runs out of memory. Thread-safe. */
+enum rb_status rb_scene_simplify(const struct rb_scene_simplify_mesh *mesh,
+                                 uint32_t target_triangles, uint32_t *out,
+                                 struct rb_scene_simplified *result, struct rb_err *err);
+
 #endif

@@ -4,6 +4,8 @@
  * projections), so every expected value is a closed form, not the renderer's output.
  * - orthographic depth: three views in one batch of a floor and a floating box; every pixel
  *   whose centre is not within 1e-3 texel of an edge holds the distance along the view axis.
+ * - simplified mesh: a finely tiled plane simplified with rb_scene_simplify and drawn through
+ *   the batch's use_simplified gives the full mesh's orthographic depths off its outline.
  * - paraboloid depth: a dual paraboloid (two hemispheres, one batch) in a room with a box; the
  *   depth is the distance to the first surface along the pixel centre's direction, and
  *   coverage is right for every pixel farther from an edge than the tessellation's bound,
@@ -341,6 +343,46 @@ static void view_basis(const double dir[3], const double up[3], double s[3], dou
     cross3(s, dir, u);
 }
 
+/* Normalizes each view's direction and writes the views as the GPU reads them. */
+static void set_ortho_views(struct rb_gpu_view *gv, struct ortho *views, int count, double half_w,
+                            double half_h, double depth_m)
+{
+    for (int i = 0; i < count; i++) {
+        struct ortho *o = &views[i];
+        normalize3(o->dir);
+        rb_view_orthographic(&gv[i],
+                             rb_v3((float)o->origin[0], (float)o->origin[1], (float)o->origin[2]),
+                             rb_v3((float)o->dir[0], (float)o->dir[1], (float)o->dir[2]),
+                             rb_v3((float)o->up[0], (float)o->up[1], (float)o->up[2]),
+                             (float)half_w, (float)half_h, (float)depth_m);
+    }
+}
+
+/* The first surface through pixel (x, y) of a w x h orthographic view v (basis sv, uv) of
+ * half-extents and depth lim[0..2]: its plane id (-1: none) and distance t; -2 when a point
+ * within lim[3] texels of the pixel centre sees another plane (the pixel is on an edge). */
+static int ortho_hit(const struct scene *s, const struct ortho *v, const double sv[3],
+                     const double uv[3], const double lim[4], int w, int h, int x, int y, double *t)
+{
+    int plane = -2;
+    for (int k = 0; k < 9; k++) {
+        /* NDC y grows down the image: view up is -y. */
+        double px = x + 0.5 + lim[3] * ring[k][0], py = y + 0.5 + lim[3] * ring[k][1];
+        double a = (px / w * 2.0 - 1.0) * lim[0], b = -(py / h * 2.0 - 1.0) * lim[1];
+        double o[3], tk;
+        for (int c = 0; c < 3; c++)
+            o[c] = v->origin[c] + a * sv[c] + b * uv[c];
+        int pk = first_hit(s, o, v->dir, lim[2], &tk);
+        if (k == 0) {
+            plane = pk;
+            *t = tk;
+        } else if (pk != plane) {
+            return -2;
+        }
+    }
+    return plane;
+}
+
 static void test_orthographic_depth(void **state)
 {
     (void)state;
@@ -361,16 +403,7 @@ static void test_orthographic_depth(void **state)
     struct rb_gpu_buffer view_buf = {0}, out = {0};
     make_buffer(g.gpu, sizeof(struct rb_gpu_view) * VIEWS, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                 "views", &view_buf);
-    struct rb_gpu_view *gv = view_buf.mapped;
-    for (int i = 0; i < VIEWS; i++) {
-        normalize3(views[i].dir);
-        struct ortho *o = &views[i];
-        rb_view_orthographic(&gv[i],
-                             rb_v3((float)o->origin[0], (float)o->origin[1], (float)o->origin[2]),
-                             rb_v3((float)o->dir[0], (float)o->dir[1], (float)o->dir[2]),
-                             rb_v3((float)o->up[0], (float)o->up[1], (float)o->up[2]),
-                             (float)half_w, (float)half_h, (float)depth_m);
-    }
+    set_ortho_views(view_buf.mapped, views, VIEWS, half_w, half_h, depth_m);
     struct rb_gpu_image target = {0}, depth = {0};
     make_image(g.gpu, W, H, VIEWS, VK_FORMAT_R32_SFLOAT,
                VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, true,
@@ -397,27 +430,11 @@ static void test_orthographic_depth(void **state)
         view_basis(views[l].dir, views[l].up, sv, uv);
         for (int y = 0; y < H; y++)
             for (int x = 0; x < W; x++) {
-                /* NDC y grows down the image: view up is -y. */
-                int plane = -2;
                 double t = 0.0;
-                bool robust = true;
-                for (int k = 0; k < 9 && robust; k++) {
-                    double px = x + 0.5 + margin_px * ring[k][0];
-                    double py = y + 0.5 + margin_px * ring[k][1];
-                    double a = (px / W * 2.0 - 1.0) * half_w, b = -(py / H * 2.0 - 1.0) * half_h;
-                    double o[3];
-                    for (int c = 0; c < 3; c++)
-                        o[c] = views[l].origin[c] + a * sv[c] + b * uv[c];
-                    double tk;
-                    int pk = first_hit(&s, o, views[l].dir, depth_m, &tk);
-                    if (k == 0) {
-                        plane = pk;
-                        t = tk;
-                    } else if (pk != plane) {
-                        robust = false;
-                    }
-                }
-                if (!robust) {
+                int plane =
+                    ortho_hit(&s, &views[l], sv, uv,
+                              (double[4]){half_w, half_h, depth_m, margin_px}, W, H, x, y, &t);
+                if (plane == -2) {
                     skipped++;
                     continue;
                 }
@@ -444,6 +461,128 @@ static void test_orthographic_depth(void **state)
     rb_gpu_image_release(g.gpu, &depth);
     rb_gpu_image_release(g.gpu, &target);
     rb_gpu_buffer_release(g.gpu, &view_buf);
+    release(&g);
+    rb_gpu_destroy(g.gpu);
+}
+
+/* ---- the simplified mesh ------------------------------------------------------------------- */
+
+/* Simplifies the uploaded scene to target triangles with rb_scene_simplify, as the frame does
+ * for the bdpt integrator's small views, into frame->view_indices. */
+static void upload_simplified(struct gpu_scene *g, uint32_t target)
+{
+    struct rb_frame *f = &g->frame;
+    const struct rb_gpu_vertex *v = f->slots[0].vertices.mapped;
+    struct rb_err err = RB_ERR_INIT;
+    struct rb_scene_simplified r;
+    make_buffer(g->gpu, f->index_count * sizeof(uint32_t), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+                "indices.view", &f->view_indices);
+    check_ok(rb_scene_simplify(&(struct rb_scene_simplify_mesh){.positions = v->position,
+                                                                .normals = v->normal,
+                                                                .stride_bytes = sizeof(*v),
+                                                                .vertex_count = f->vertex_count,
+                                                                .indices = f->indices.mapped,
+                                                                .index_count = f->index_count},
+                               target, f->view_indices.mapped, &r, &err),
+             &err);
+    f->view_index_count = r.index_count;
+}
+
+/* A plane of 16 x 16 tiles (512 triangles, a seam at every tile edge) simplifies without error,
+ * so three oblique orthographic depth views of the simplified mesh, drawn with the batch's
+ * use_simplified, match the full mesh's depths at every pixel off the plane's outline; and
+ * use_simplified does choose view_indices: one tile's worth of them covers one tile. */
+static void test_simplified_depth(void **state)
+{
+    (void)state;
+    enum { W = 96, H = 80, VIEWS = 3, TARGET = 8 };
+    const double lim[4] = {10.0, 9.0, 30.0, 1e-3}; /* half width, half height, depth, margin */
+    static struct scene s;
+    s.count = 0;
+    add_grid(&s, 16, 0.25, true, 0);
+    struct ortho views[VIEWS] = {
+        {{0.5, -0.3, 12.0}, {0, 0, -1}, {0, 1, 0}},
+        {{-3.0, 4.0, 10.0}, {0.3, -0.4, -1}, {0, 1, 0}},
+        {{2.0, 1.0, 8.0}, {-0.2, -0.1, -1}, {1, 1, 0}},
+    };
+    struct gpu_scene g = {.gpu = make_gpu()};
+    upload(&g, &s, 0.5f);
+    upload_simplified(&g, TARGET);
+    print_message("simplified: %u of %u triangles\n", g.frame.view_index_count / 3,
+                  g.frame.index_count / 3);
+    assert_true(g.frame.view_index_count > 0 && g.frame.view_index_count / 3 <= TARGET);
+
+    struct rb_gpu_buffer view_buf = {0}, out[3] = {0};
+    make_buffer(g.gpu, sizeof(struct rb_gpu_view) * VIEWS, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                "views", &view_buf);
+    set_ortho_views(view_buf.mapped, views, VIEWS, lim[0], lim[1], lim[2]);
+    struct rb_gpu_image target = {0}, depth = {0};
+    make_image(g.gpu, W, H, VIEWS, VK_FORMAT_R32_SFLOAT,
+               VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, true,
+               "ortho depth", &target);
+    make_image(g.gpu, W, H, 1, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+               false, "scratch depth", &depth);
+    struct rb_pass_view *p = make_pass(g.gpu, RB_VIEW_KIND_ORTHOGRAPHIC, RB_VIEW_OUTPUT_DEPTH);
+    /* out[0]: the full mesh; out[1]: the simplified one; out[2]: view_indices cut to a tile */
+    for (int i = 0; i < 3; i++) {
+        make_buffer(g.gpu, (VkDeviceSize)W * H * VIEWS * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                    "readback", &out[i]);
+        if (i == 2) { /* the full mesh's first tile */
+            memcpy(g.frame.view_indices.mapped, g.frame.indices.mapped, 6 * sizeof(uint32_t));
+            g.frame.view_index_count = 6;
+        }
+        run_batch(&g, p,
+                  &(struct rb_view_batch){.kind = RB_VIEW_KIND_ORTHOGRAPHIC,
+                                          .output = RB_VIEW_OUTPUT_DEPTH,
+                                          .views = &view_buf,
+                                          .view_count = VIEWS,
+                                          .targets = {&target},
+                                          .depth = &depth,
+                                          .use_simplified = i > 0},
+                  (const struct rb_gpu_image *[]){&target}, &out[i], 1);
+    }
+
+    const float *full = out[0].mapped, *simple = out[1].mapped, *tile = out[2].mapped;
+    int checked = 0, skipped = 0, bad = 0, covered = 0, tile_covered = 0;
+    double worst = 0.0;
+    for (int l = 0; l < VIEWS; l++) {
+        double sv[3], uv[3];
+        view_basis(views[l].dir, views[l].up, sv, uv);
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                size_t i = (size_t)l * W * H + (size_t)y * W + x;
+                tile_covered += tile[i] != FAR_CLEAR;
+                double t;
+                if (ortho_hit(&s, &views[l], sv, uv, lim, W, H, x, y, &t) == -2) {
+                    skipped++;
+                    continue;
+                }
+                checked++;
+                covered += full[i] != FAR_CLEAR;
+                double e = full[i] == FAR_CLEAR || simple[i] == FAR_CLEAR
+                               ? (full[i] == simple[i] ? 0.0 : 1.0)
+                               : fabs((double)simple[i] - full[i]);
+                worst = e > worst ? e : worst;
+                if (e > 1e-4 && bad++ < 8)
+                    print_message("view %d pixel (%d, %d): %.7g, full mesh %.7g\n", l, x, y,
+                                  (double)simple[i], (double)full[i]);
+            }
+    }
+    print_message("simplified: %d pixels checked, %d on the outline, %d covered, worst %.3g m; "
+                  "one tile covers %d\n",
+                  checked, skipped, covered, worst, tile_covered);
+    assert_int_equal(bad, 0);
+    assert_true(covered > W * H && covered < checked);
+    /* a 1 m tile of a 16 m plane: about 1/256 of the plane's pixels, and some */
+    assert_true(tile_covered > 0 && tile_covered < covered / 64);
+
+    rb_pass_view_destroy(p);
+    for (int i = 0; i < 3; i++)
+        rb_gpu_buffer_release(g.gpu, &out[i]);
+    rb_gpu_image_release(g.gpu, &depth);
+    rb_gpu_image_release(g.gpu, &target);
+    rb_gpu_buffer_release(g.gpu, &view_buf);
+    rb_gpu_buffer_release(g.gpu, &g.frame.view_indices);
     release(&g);
     rb_gpu_destroy(g.gpu);
 }
@@ -1020,11 +1159,9 @@ static void test_unsupported_variant(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_orthographic_depth),
-        cmocka_unit_test(test_paraboloid_depth),
-        cmocka_unit_test(test_rsm),
-        cmocka_unit_test(test_linked_list),
-        cmocka_unit_test(test_unsupported_variant),
+        cmocka_unit_test(test_orthographic_depth), cmocka_unit_test(test_simplified_depth),
+        cmocka_unit_test(test_paraboloid_depth),   cmocka_unit_test(test_rsm),
+        cmocka_unit_test(test_linked_list),        cmocka_unit_test(test_unsupported_variant),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
