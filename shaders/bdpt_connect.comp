@@ -201,9 +201,10 @@ vec3 from_lights(vec3 z1, vec3 n, vec3 v, rb_material m, float pdf_bundle)
             vis = shadow_visibility(layer, z1, n, cos_z);
             // VPLs come from shadowed lights only (generate): weigh against them.
             vec4 c = blights[j].choice;
-            float pdf_vpl = c.x * c.z * cos_z / (kind == RB_KIND_DIRECTIONAL ? 1.0 : dist2);
+            float pdf_vpl =
+                rb_bdpt_vpl_density(c.x * c.z, cos_z, kind == RB_KIND_DIRECTIONAL ? 1.0 : dist2);
             if (pc.index.w == RB_BDPT_MIS)
-                w = pc.counts.y * pdf_bundle / (pc.counts.y * pdf_bundle + pc.counts.x * pdf_vpl);
+                w = rb_bdpt_balance(pc.counts.y, pdf_bundle, pc.counts.x, pdf_vpl);
         }
         if (vis <= 0.0)
             continue;
@@ -249,9 +250,8 @@ void main()
         if (any(greaterThan(x, vec3(0.0)))) {
             float w = 1.0;
             if (strategies == RB_BDPT_MIS) {
-                float pdf_vpl = vpls[k].normal.w;
-                float pdf_bundle = -dot(vpls[k].normal.xyz, l) / (2.0 * RB_PI * r2);
-                w = n_a * pdf_vpl / (n_a * pdf_vpl + n_b * pdf_bundle);
+                float pdf_bundle = rb_bdpt_bundle_density(-dot(vpls[k].normal.xyz, l), r2);
+                w = rb_bdpt_balance(n_a, vpls[k].normal.w, n_b, pdf_bundle);
             }
             add(id, is, n1, v1, l, f0, f90, rough, x * (w / n_a));
         }
@@ -277,7 +277,7 @@ void main()
                     add(dd, ds, n1, v1, dir, f0, f90, rough, h.m.emission * (scale / n_b));
                 float cos_in = -dot(nz, dir);
                 if (strategies != RB_BDPT_VPL && cos_in > 0.0) {
-                    float pdf_bundle = cos_in / (2.0 * RB_PI * h.t * h.t);
+                    float pdf_bundle = rb_bdpt_bundle_density(cos_in, h.t * h.t);
                     vec3 x = from_lights(z1, nz, -dir, h.m, pdf_bundle);
                     add(id, is, n1, v1, dir, f0, f90, rough, x * (scale / n_b));
                 }

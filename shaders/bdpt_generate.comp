@@ -157,7 +157,7 @@ void vpl(uint i)
             // B.choice.z: the density of the direction (point, spot) or of the beam point.
             float pdf = B.choice.x * B.choice.z;
             o.position = vec4(p.xyz, 1.0);
-            o.normal = vec4(n, kind == RB_KIND_DIRECTIONAL ? pdf * cos_in : pdf * cos_in / dist2);
+            o.normal = vec4(n, rb_bdpt_vpl_density(pdf, cos_in, dist2)); // dist2 = 1: directional
             o.power = vec4(intensity / pdf, 0.0);
             o.material.xy = imageLoad(rsm_material, ivec3(texel, int(layer))).xy;
         }

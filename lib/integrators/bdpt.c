@@ -309,6 +309,13 @@ static void write_lights(const struct rb_integrator *it, struct rb_bdpt_frame *b
     }
 }
 
+/* The index buffer the small views draw: the simplified mesh when there is one
+ * (integrator.bdpt.view_triangles), the scene's otherwise. */
+static const struct rb_gpu_buffer *view_indices(const struct rb_frame *frame)
+{
+    return frame->view_indices.buffer ? &frame->view_indices : &frame->indices;
+}
+
 static void record_rsm(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer cmd,
                        const struct rb_frame_ctx *ctx)
 {
@@ -317,7 +324,7 @@ static void record_rsm(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer
     const struct rb_gpu_access uses[] = {
         {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
         {.buffer = &frame->shadow_views, .use = RB_GPU_GRAPHICS_READ},
-        {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
+        {.buffer = view_indices(frame), .use = RB_GPU_INDEX_READ},
         {.buffer = &frame->materials, .use = RB_GPU_FRAGMENT_READ},
         {.image = &frame->srgb_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
         {.image = &frame->linear_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
@@ -345,6 +352,7 @@ static void record_rsm(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer
             .targets = {&b->rsm[0], &b->rsm[1], &b->rsm[2], &b->rsm[3]},
             .depth = &b->rsm_depth,
             .intensity = {lights[i].color[0], lights[i].color[1], lights[i].color[2]},
+            .use_simplified = true,
         };
         rb_pass_view_record(d->views, cmd, frame, ctx->cur, &batch);
     }
@@ -359,7 +367,7 @@ static void record_bundle(struct rb_integrator *it, struct bdpt *d, VkCommandBuf
     const struct rb_gpu_access uses[] = {
         {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
         {.buffer = &b->bundle_views, .use = RB_GPU_GRAPHICS_READ},
-        {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
+        {.buffer = view_indices(frame), .use = RB_GPU_INDEX_READ},
         {.buffer = &frame->materials, .use = RB_GPU_FRAGMENT_READ},
         {.image = &frame->srgb_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
         {.image = &frame->linear_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
@@ -376,6 +384,7 @@ static void record_bundle(struct rb_integrator *it, struct bdpt *d, VkCommandBuf
         .first_layer = 0,
         .view_count = 1,
         .list = &b->bundle,
+        .use_simplified = true,
     };
     rb_pass_view_record(d->views, cmd, frame, ctx->cur, &batch);
     /* The pool's counters, kept per bundle for collect (the next batch resets them). */
@@ -460,7 +469,7 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
         const struct rb_gpu_access vpl[] = {
             {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
             {.buffer = &b->vpl_views, .use = RB_GPU_GRAPHICS_READ},
-            {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
+            {.buffer = view_indices(frame), .use = RB_GPU_INDEX_READ},
             {.image = &b->vpl_maps, .use = RB_GPU_COLOR_ATTACHMENT},
             {.image = &b->vpl_depth, .use = RB_GPU_DEPTH_ATTACHMENT},
         };
@@ -473,6 +482,7 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
                                 .view_count = b->vpl_count,
                                 .targets = {&b->vpl_maps},
                                 .depth = &b->vpl_depth,
+                                .use_simplified = true,
                             });
         rb_integrator_pass_end(it, cmd);
     }

@@ -59,6 +59,37 @@ struct rb_gpu_bdpt_image_push {
     RB_VEC4(stops);   /* depth threshold, normal threshold, unused, unused */
 };
 
+/* ---- the MIS weights (BDPT.md "As implemented"), one definition for GLSL and C: the connect
+ * shader uses them and tests/unit/test_bdpt.c holds them to their properties. */
+#ifdef VULKAN
+#define RB_BDPT_FN
+#else
+#define RB_BDPT_FN static inline
+#endif
+
+/* The area density at z of a bundle ray from x: a direction uniform over x's hemisphere
+ * (1 / 2 pi) seen from z at cos_z, dist2 away. */
+RB_BDPT_FN float rb_bdpt_bundle_density(float cos_z, float dist2)
+{
+    return cos_z / (2.0f * 3.14159265358979f * dist2);
+}
+
+/* The area density at z of a VPL: the light's choice times its direction's (or beam point's)
+ * density, pdf, over the sphere of radius dist (1 for a directional light), at cos_in. */
+RB_BDPT_FN float rb_bdpt_vpl_density(float pdf, float cos_in, float dist2)
+{
+    return pdf * cos_in / dist2;
+}
+
+/* The balance heuristic over a pixel's samples: the weight of a strategy drawn n_s times that
+ * finds z with area density p_s, against the other's n_o draws at density p_o. The weights of
+ * the two strategies of a path sum to one. */
+RB_BDPT_FN float rb_bdpt_balance(float n_s, float p_s, float n_o, float p_o)
+{
+    float s = n_s * p_s, o = n_o * p_o;
+    return s > 0.0f ? s / (s + o) : 0.0f;
+}
+
 /* Strategies, as enum rb_bdpt_strategies. */
 #define RB_BDPT_MIS 1
 #define RB_BDPT_VPL 2
