@@ -19,7 +19,7 @@ ifneq ($(V),1)
 Q := @
 endif
 
-PKGS := vulkan OpenImageIO OpenColorIO yaml-0.1 tinygltf libxxhash
+PKGS := vulkan OpenImageIO OpenColorIO yaml-0.1 tinygltf libxxhash jansson
 # Deferred (=), so a fresh machine gets them after scripts/install-deps.sh has run.
 PKG_CFLAGS = $(shell $(PKG_CONFIG) --cflags $(PKGS) 2>/dev/null)
 PKG_LIBS = $(shell $(PKG_CONFIG) --libs $(PKGS) 2>/dev/null) -lembree3 -lpthread -lm
