@@ -21,6 +21,7 @@ struct rb_render_desc {
     const char *device;    /* GPU: a device name substring or index; NULL: lavapipe */
     bool validate;         /* GPU: the Khronos validation layer; any message fails */
     uint32_t thread_count; /* reference: worker threads; 0: every core */
+    bool is_timing_only;   /* write the timing sidecar alone (raybundle bench): no EXR, PNG */
     /* reference: called after each pass of samples; returning false stops the frame, which is
      * then partial and not written. May be NULL. */
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
