@@ -63,9 +63,17 @@ static void json_str(const char *s)
     putchar('"');
 }
 
-/* A number, or null where it is not finite (JSON has no NaN or infinity). */
-static void json_num(double v)
+/* ", \"key\": " and a string, or a number (null where it is not finite: JSON has neither NaN
+ * nor infinity). */
+static void json_field_str(const char *key, const char *v)
 {
+    printf(", \"%s\": ", key);
+    json_str(v);
+}
+
+static void json_field_num(const char *key, double v)
+{
+    printf(", \"%s\": ", key);
     if (isfinite(v))
         printf("%.17g", v);
     else
@@ -81,39 +89,31 @@ static void print_json(const struct rb_analysis_timing_set *base,
     printf("{\n  \"alpha\": %g,\n  \"threshold_pct\": %g,\n", desc->alpha, desc->threshold_pct);
     for (int i = 0; i < 2; i++) {
         const struct rb_io_bench *b = &sets[i]->bench;
-        printf("  \"%s\": {\"dir\": ", i ? "new" : "base");
-        json_str(sets[i]->dir);
-        printf(", \"runs\": %u, \"device\": ", b->run_count);
-        json_str(b->device);
-        fputs(", \"driver\": ", stdout);
-        json_str(b->driver);
-        fputs(", \"build\": ", stdout);
-        json_str(b->build);
-        fputs(", \"job_hash\": ", stdout);
-        json_str(b->job_hash);
+        printf("  \"%s\": {\"runs\": %u", i ? "new" : "base", b->run_count);
+        json_field_str("dir", sets[i]->dir);
+        json_field_str("device", b->device);
+        json_field_str("driver", b->driver);
+        json_field_str("build", b->build);
+        json_field_str("job_hash", b->job_hash);
         fputs("},\n", stdout);
     }
     fputs("  \"rows\": [", stdout);
     for (size_t i = 0; i < n; i++) {
         const struct rb_analysis_timing_row *r = &rows[i];
+        bool has_both = r->base_count && r->new_count;
         fputs(i ? ",\n    {\"name\": " : "\n    {\"name\": ", stdout);
         json_str(r->name);
-        printf(", \"base_runs\": %zu, \"new_runs\": %zu, \"base_median_ms\": ", r->base_count,
-               r->new_count);
-        json_num(r->base_median_ms);
-        fputs(", \"new_median_ms\": ", stdout);
-        json_num(r->new_median_ms);
-        fputs(", \"change_pct\": ", stdout);
-        json_num(r->change_pct);
-        fputs(", \"u\": ", stdout);
-        json_num(r->base_count && r->new_count ? r->test.u : NAN);
-        fputs(", \"p\": ", stdout);
-        json_num(r->test.p);
-        printf(", \"method\": \"%s\", \"verdict\": \"%s\"}",
-               !r->base_count || !r->new_count           ? "none"
-               : r->test.method == RB_ANALYSIS_MWU_EXACT ? "exact"
-                                                         : "normal",
-               rb_analysis_verdict_name(r->verdict));
+        printf(", \"base_runs\": %zu, \"new_runs\": %zu", r->base_count, r->new_count);
+        json_field_num("base_median_ms", r->base_median_ms);
+        json_field_num("new_median_ms", r->new_median_ms);
+        json_field_num("change_pct", r->change_pct);
+        json_field_num("u", has_both ? r->test.u : NAN);
+        json_field_num("p", r->test.p);
+        json_field_str("method", !has_both                                 ? "none"
+                                 : r->test.method == RB_ANALYSIS_MWU_EXACT ? "exact"
+                                                                           : "normal");
+        json_field_str("verdict", rb_analysis_verdict_name(r->verdict));
+        fputs("}", stdout);
     }
     printf("\n  ],\n  \"regression\": %s\n}\n", is_regression ? "true" : "false");
 }

@@ -5,14 +5,6 @@
 # of different jobs refused without --force; usage errors and broken sets.
 . tests/integration/lib.sh
 
-has_line() { # has_line REGEX DESCRIPTION (on stdout)
-    if grep -q -- "$1" "$T/stdout"; then
-        ok "$2"
-    else
-        not_ok "$2" "stdout lacks /$1/" "stdout: $(head -c 3000 "$T/stdout")"
-    fi
-}
-
 # ---- usage ---------------------------------------------------------------------------------
 
 rb bench --help
@@ -54,7 +46,7 @@ for set in a b; do
     rb bench jobs/demo.yaml --size 64x36 --frames 0-1 --runs 3 --out "$T/$set" -q
     expect_exit 0 "bench of the demo into $set"
 done
-has_line "^3 runs of 2 frames (0-1) on .* in $T/b/" "bench says what it measured"
+stdout_has "^3 runs of 2 frames (0-1) on .* in $T/b/" "bench says what it measured"
 check "bench keeps each run's sidecars" test -f "$T/a/run-01/frame.0000.timing.json" -a \
     -f "$T/a/run-03/frame.0001.timing.json"
 check "bench writes no images" test -z "$(find "$T/a" -name '*.exr' -o -name '*.png')"
@@ -74,13 +66,13 @@ expect_exit 0 "timing compare of two benches of the same build exits 0"
 passes=$(sed -n 's/.*{"name": "\([^"]*\)".*/\1/p' "$T/a/run-01/frame.0000.timing.json")
 check "the demo's sidecars list passes" test -n "$passes"
 for p in $passes; do
-    has_line "^$p  *[0-9.]* ms  *[0-9.]* ms .*too few runs$" "pass '$p' is in the table"
+    stdout_has "^$p  *[0-9.]* ms  *[0-9.]* ms .*too few runs$" "pass '$p' is in the table"
 done
-has_line "^frame wall  *[0-9.]* ms" "the frame wall time is in the table"
+stdout_has "^frame wall  *[0-9.]* ms" "the frame wall time is in the table"
 stderr_has "has 3 runs: 9 or more are recommended" "fewer than 9 runs are warned about"
 rb timing compare --json "$T/a" "$T/b"
 expect_exit 0 "timing compare --json exits 0"
-has_line '"regression": false' "--json says there is no regression"
+stdout_has '"regression": false' "--json says there is no regression"
 if command -v python3 >/dev/null && python3 -c 'import json' 2>/dev/null; then
     check "--json is JSON with a row a series" python3 -c "
 import json, sys
@@ -144,16 +136,16 @@ check "the doctored copy tripled gpu_ms" grep -q '"gpu_ms": 6.0' "$T/slow/run-01
 rb timing compare "$T/base" "$T/slow"
 expect_exit 1 "tripled pass times exit 1"
 for p in gbuffer shadow direct; do
-    has_line "^$p .* +200.0% .* slower$" "pass '$p' is slower by 200%"
+    stdout_has "^$p .* +200.0% .* slower$" "pass '$p' is slower by 200%"
 done
-has_line "^frame wall .* same$" "the unchanged wall time is the same"
+stdout_has "^frame wall .* same$" "the unchanged wall time is the same"
 check "9 runs earn no warning" sh -c "! grep -q recommended '$T/stderr'"
 rb timing compare "$T/slow" "$T/base"
 expect_exit 0 "the other way round, faster, exits 0"
-has_line "^shadow .* -66.7% .* faster$" "the other way round is faster"
+stdout_has "^shadow .* -66.7% .* faster$" "the other way round is faster"
 rb timing compare --threshold 250% "$T/base" "$T/slow"
 expect_exit 0 "a threshold above the change exits 0"
-has_line "^direct .* same$" "within the threshold is the same"
+stdout_has "^direct .* same$" "within the threshold is the same"
 rb timing compare "$T/base" "$T/base"
 expect_exit 0 "a set against itself exits 0"
 
