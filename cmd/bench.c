@@ -104,8 +104,13 @@ static int on_run(struct cmd_bench_run *run, void *user)
         return start(run);
     if (run->run == 1)
         b->first = *run;
-    else if (strcmp(run->job_hash, b->first.job_hash) || strcmp(run->device, b->first.device))
-        RB_BUG("run %u rendered another job or device than run 1", run->run);
+    else if (strcmp(run->job_hash, b->first.job_hash) || strcmp(run->device, b->first.device)) {
+        /* each run loads the job and scene again: one of them changed under the bench */
+        cmd_error("run %u rendered job %s on '%s', and run 1 job %s on '%s': was the job or "
+                  "scene changed during the bench?",
+                  run->run, run->job_hash, run->device, b->first.job_hash, b->first.device);
+        return RB_EXIT_FAILED;
+    }
     b->wall_s += run->wall_s;
     if (!run->is_quiet)
         fprintf(stderr, "raybundle: run %u/%u: %d frames in %.2f s\n", run->run, run->run_count,
