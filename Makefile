@@ -19,7 +19,7 @@ ifneq ($(V),1)
 Q := @
 endif
 
-PKGS := vulkan OpenImageIO OpenColorIO yaml-0.1 tinygltf libxxhash
+PKGS := vulkan OpenImageIO OpenColorIO yaml-0.1 tinygltf libxxhash jansson
 # Deferred (=), so a fresh machine gets them after scripts/install-deps.sh has run.
 PKG_CFLAGS = $(shell $(PKG_CONFIG) --cflags $(PKGS) 2>/dev/null)
 # Embree and meshoptimizer ship no pkg-config file in Debian 12.
@@ -211,6 +211,7 @@ install: $(BUILD)/raybundle
 
 uninstall:
 	rm -f "$(DESTDIR)$(BINDIR)/raybundle" "$(DESTDIR)$(MANDIR)/man1/raybundle.1" \
+		"$(DESTDIR)$(MANDIR)/man1/raybundle-bench.1" \
 		"$(DESTDIR)$(MANDIR)/man5/raybundle-job.5" "$(DESTDIR)$(DATADIR)/ocio/config.ocio"
 
 lint:

@@ -15,7 +15,31 @@ int cmd_render(int argc, char **argv);
 int cmd_reference(int argc, char **argv);
 int cmd_compare(int argc, char **argv);
 int cmd_info(int argc, char **argv);
+int cmd_bench(int argc, char **argv);
+int cmd_timing(int argc, char **argv);
 int cmd_help(int argc, char **argv);
+
+/* raybundle bench's runs, rendered by cmd/render.c for cmd/bench.c. */
+struct cmd_bench_run {
+    const char *out_dir;  /* --out: the set's directory */
+    const char *job_path; /* JOB as given */
+    const char *runs;     /* --runs as given, or NULL */
+    bool is_quiet;        /* -q: no progress lines */
+    uint32_t run_count;   /* set by the first on_run call */
+    uint32_t run;         /* 0 before the first run, then the run just rendered (1-based) */
+    /* what run rendered (the same for every run of a job) */
+    char device[256], driver[256], job_hash[17];
+    const char *integrator;
+    uint32_t width_px, height_px;
+    int first, last; /* the frame range */
+    double wall_s;   /* the run, from its first frame to its files written */
+};
+typedef int (*cmd_bench_fn)(struct cmd_bench_run *run, void *user);
+/* Parses bench's command line (render's options, --runs N, and --out DIR for the set), calls
+ * on_run with run 0 (which checks --runs and the directory and sets run_count), then renders
+ * the job run_count times into out_dir/run-01, ... (timing sidecars alone), calling on_run after
+ * each. Returns the exit status: the first nonzero of on_run's and the renders'. */
+int cmd_render_bench(int argc, char **argv, cmd_bench_fn on_run, void *user);
 
 /* True while a progress line (ending in '\r' updates, no newline) is open on stderr. */
 extern bool cmd_bar_open;

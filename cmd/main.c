@@ -17,6 +17,8 @@ static const struct command commands[] = {
     {"render", cmd_render, "render a job to per-frame EXR images and timing sidecars"},
     {"reference", cmd_reference, "render a job with the CPU reference path tracer"},
     {"compare", cmd_compare, "compare two images or frame sequences: RMSE, relMSE, PSNR, ..."},
+    {"bench", cmd_bench, "render a job N times, keeping every run's timing sidecars"},
+    {"timing", cmd_timing, "'timing compare BASE NEW': per-pass regression test of two bench sets"},
     {"info", cmd_info, "list Vulkan devices, drivers and the features raybundle uses"},
     {"help", cmd_help, "show this list, or 'help job' for every job-file key"},
 };

@@ -52,7 +52,9 @@ struct options {
     bool is_lenient; /* --lenient: glTF type errors are warnings */
     bool is_strict;  /* --strict: a full ray-bundle node buffer fails the frame */
     int verbose;
-    const char *command; /* "render" or "reference" */
+    const char *command; /* "render", "reference" or "bench" */
+    const char *runs;    /* bench: --runs as given */
+    bool is_timing_only; /* bench: timing sidecars alone, no images */
     /* Text behind the options that are sugar for --set (--frames, --size, ...). */
     char frames_start[32], frames_end[32], size_value[48];
     char frames_origin[64], size_origin[64], integrator_origin[64], spp_origin[64],
@@ -66,6 +68,13 @@ static void usage(FILE *f, const char *command)
                    "\n"
                    "Renders JOB with the CPU reference path tracer (the ground truth the GPU\n"
                    "integrators are judged against): the same files and layers as render.\n"
+                   "\n");
+    else if (strcmp(command, "bench") == 0)
+        fprintf(f, "usage: raybundle bench JOB --out DIR [--runs N] [options]\n"
+                   "\n"
+                   "Renders JOB N times (default 9), run by run, keeping each run's timing\n"
+                   "sidecars in DIR/run-01, DIR/run-02, ... and what was measured in\n"
+                   "DIR/bench.json, for 'raybundle timing compare'. No images are written.\n"
                    "\n");
     else
         fprintf(f, "usage: raybundle render JOB [options]\n"
@@ -159,7 +168,8 @@ static int parse_options(int argc, char **argv, struct options *o)
         O_SPP,
         O_TIME_LIMIT,
         O_THREADS,
-        O_STRICT
+        O_STRICT,
+        O_RUNS
     };
     static const struct option opts[] = {
         {"frames", required_argument, NULL, O_FRAMES},
@@ -177,6 +187,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"threads", required_argument, NULL, O_THREADS},
         {"lenient", no_argument, NULL, O_LENIENT},
         {"strict", no_argument, NULL, O_STRICT},
+        {"runs", required_argument, NULL, O_RUNS},
         {"quiet", no_argument, NULL, 'q'},
         {"verbose", no_argument, NULL, 'v'},
         {"help", no_argument, NULL, 'h'},
@@ -226,6 +237,13 @@ static int parse_options(int argc, char **argv, struct options *o)
         case O_THREADS: o->threads = optarg; break;
         case O_LENIENT: o->is_lenient = true; break;
         case O_STRICT: o->is_strict = true; break;
+        case O_RUNS:
+            if (strcmp(o->command, "bench") != 0) {
+                cmd_error("--runs is an option of 'raybundle bench'");
+                return -1;
+            }
+            o->runs = optarg;
+            break;
         case 'q': o->quiet = true; break;
         case 'v': o->verbose++; break;
         case 'h': usage(stdout, o->command); return 1;
@@ -355,11 +373,11 @@ static bool on_reference_pass(void *user, uint32_t done, uint32_t total)
     return !interrupted;
 }
 
-static int run(struct options *o, int argc, char **argv)
+/* Renders the job once as o says; bench, when not NULL, gets what was rendered and the
+ * closing line is left to the caller. */
+static int render_job(struct options *o, struct cmd_bench_run *bench)
 {
-    int rc = parse_options(argc, argv, o);
-    if (rc)
-        return rc > 0 ? RB_EXIT_OK : RB_EXIT_USAGE;
+    int rc;
     rb_log_set_level(o->quiet ? RB_LOG_ERROR : (enum rb_log_level)(RB_LOG_WARN + o->verbose));
     rb_log_set_sink(log_sink, NULL);
     if (getenv("RB_VALIDATE") && strcmp(getenv("RB_VALIDATE"), "1") == 0)
@@ -415,6 +433,7 @@ static int run(struct options *o, int argc, char **argv)
                                                         .validate = o->validate,
                                                         .strict = o->is_strict,
                                                         .thread_count = threads,
+                                                        .is_timing_only = o->is_timing_only,
                                                         .on_pass = on_reference_pass,
                                                         .user = &tty},
                                &r, &err))) {
@@ -501,7 +520,18 @@ static int run(struct options *o, int argc, char **argv)
     }
     signal(SIGINT, SIG_DFL);
     signal(SIGTERM, SIG_DFL);
-    if (rc == RB_EXIT_OK) {
+    if (rc == RB_EXIT_OK && bench) {
+        rb_strlcpy(bench->device, rb_render_device(r), sizeof(bench->device));
+        rb_strlcpy(bench->driver, rb_render_driver(r), sizeof(bench->driver));
+        snprintf(bench->job_hash, sizeof(bench->job_hash), "%016llx",
+                 (unsigned long long)setup.job_hash);
+        bench->integrator = rb_integrator_name(job->integrator.name);
+        bench->width_px = job->width_px;
+        bench->height_px = job->height_px;
+        bench->first = first;
+        bench->last = last;
+        bench->wall_s = rb_monotonic_s() - started;
+    } else if (rc == RB_EXIT_OK) {
         char dir[4096];
         output_dir(job->output, dir, sizeof(dir));
         printf("%d frame%s (%d-%d) in %s: %d rendered", total, total == 1 ? "" : "s", first, last,
@@ -518,6 +548,44 @@ out:
     rb_job_destroy(job);
     rb_log_set_sink(NULL, NULL);
     return rc;
+}
+
+static int run(struct options *o, int argc, char **argv)
+{
+    int rc = parse_options(argc, argv, o);
+    if (rc)
+        return rc > 0 ? RB_EXIT_OK : RB_EXIT_USAGE;
+    return render_job(o, NULL);
+}
+
+int cmd_render_bench(int argc, char **argv, cmd_bench_fn on_run, void *user)
+{
+    struct options o = {.command = "bench", .is_timing_only = true};
+    int rc = parse_options(argc, argv, &o);
+    if (rc)
+        return rc > 0 ? RB_EXIT_OK : RB_EXIT_USAGE;
+    if (!o.out_dir || o.resume || o.preview) {
+        cmd_error(!o.out_dir ? "bench needs --out DIR, the directory of the set"
+                             : "bench renders every frame afresh and writes no images: "
+                               "--resume and --preview do not apply");
+        usage(stderr, o.command);
+        return RB_EXIT_USAGE;
+    }
+    struct cmd_bench_run b = {
+        .out_dir = o.out_dir, .job_path = o.job_path, .runs = o.runs, .is_quiet = o.quiet};
+    char dir[4096];
+    if ((rc = on_run(&b, user)))
+        return rc;
+    for (b.run = 1; b.run <= b.run_count; b.run++) {
+        if ((size_t)snprintf(dir, sizeof(dir), "%s/run-%02u", b.out_dir, b.run) >= sizeof(dir)) {
+            cmd_error("--out '%s': the path is too long", b.out_dir);
+            return RB_EXIT_USAGE;
+        }
+        o.out_dir = dir;
+        if ((rc = render_job(&o, &b)) || (rc = on_run(&b, user)))
+            return rc;
+    }
+    return RB_EXIT_OK;
 }
 
 int cmd_render(int argc, char **argv)

@@ -11,7 +11,7 @@ libopenimageio-dev openimageio-tools
 libopencolorio-dev opencolorio-tools
 libtinygltf-dev nlohmann-json3-dev
 libembree-dev libmeshoptimizer-dev
-libyaml-dev libxxhash-dev
+libyaml-dev libxxhash-dev libjansson-dev
 libcmocka-dev
 mandoc man-db time clang-format
 "

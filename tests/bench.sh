@@ -1,7 +1,8 @@
 #!/bin/sh
 # Benchmark (not a test): renders the demo at 640x360 for 24 frames and prints each pass's
-# median GPU milliseconds, frames per second and peak resident memory; then the CPU reference's
-# speed, and its error on the Cornell box at 64 to 1024 spp.
+# median GPU milliseconds, frames per second and peak resident memory; the timing compare of
+# the build against itself; then the CPU reference's speed, and its error on the Cornell box
+# at 64 to 1024 spp.
 set -eu
 BUILD=${BUILD:-build}
 out=$(mktemp -d "${TMPDIR:-/tmp}/raybundle-bench.XXXXXX")
@@ -30,6 +31,18 @@ gpu=$(cat "$out"/frame.*.timing.json | sed -n 's/.*"gpu_total_ms": \([0-9.eE+-]*
 awk -v w="$wall" -v g="$gpu" 'BEGIN { printf "frame wall median %.1f ms, GPU passes median %.1f ms: wall / GPU %.2f\n", w, g, w / g }'
 awk -v s="$start" -v e="$end" -v f="$frames" 'BEGIN { printf "frames per second (whole run, incl. start-up and EXR writes): %.2f\n", f / (e - s) }'
 echo "peak resident memory: $(cat "$out/rss") KiB"
+
+# The build against itself: two bench sets of the demo (9 runs each, 160x90, 4 frames),
+# compared pass by pass; expect "same" everywhere (a verdict otherwise is the machine's drift
+# between the sets, beyond the 5% threshold).
+for set in base new; do
+    "$BUILD/raybundle" bench jobs/demo.yaml --size 160x90 --frames 0-3 --runs 9 \
+        --out "$out/bench-$set" -q >/dev/null
+done
+echo "timing compare of this build against itself (demo 160x90, 4 frames, 9 runs a set):"
+status=0
+"$BUILD/raybundle" timing compare "$out/bench-base" "$out/bench-new" || status=$?
+echo "timing compare exit status: $status"
 
 # The CPU reference: the demo at 320x180, 64 spp, with 1 and 2 threads.
 for threads in 1 2; do

@@ -1,7 +1,8 @@
 /* Image analysis: error metrics between a test image and a reference (RMSE, relative MSE, MAE,
  * PSNR, the largest error and where it is), masks that choose the pixels compared, and their
- * accumulation over a frame sequence. Knows nothing of the command line; raybundle compare
- * (cmd/compare.c) loads the files and prints. */
+ * accumulation over a frame sequence; timing regression between two bench sets (the
+ * Mann-Whitney U test per pass). Knows nothing of the command line; raybundle compare
+ * (cmd/compare.c) and raybundle timing (cmd/timing.c) load the files and print. */
 #ifndef RB_ANALYSIS_ANALYSIS_H
 #define RB_ANALYSIS_ANALYSIS_H
 
@@ -122,5 +123,128 @@ void rb_analysis_metrics_add(struct rb_analysis_metrics *total,
 enum rb_status rb_analysis_error_write(const char *path, uint32_t width_px, uint32_t height_px,
                                        uint32_t channel_count, const float *abs_error,
                                        const float *rel_error, struct rb_err *err);
+
+/* ---- timing regression (timing.c) ------------------------------------------------------- */
+
+/* How rb_analysis_mann_whitney computes its p-value. */
+enum rb_analysis_mwu_method {
+    RB_ANALYSIS_MWU_AUTO = 0, /* exact without ties and at most RB_ANALYSIS_MWU_EXACT_MAX values
+                               * a sample, the normal approximation otherwise */
+    RB_ANALYSIS_MWU_EXACT,    /* the exact null distribution of U; refuses ties and more than
+                               * 60 values in all */
+    RB_ANALYSIS_MWU_NORMAL,   /* the normal approximation with the tie and continuity corrections
+                               * (SciPy's mannwhitneyu, method="asymptotic") */
+};
+#define RB_ANALYSIS_MWU_EXACT_MAX 20
+
+struct rb_analysis_mwu {
+    double u; /* U of the first sample: pairs (a_i, b_j) with a_i > b_j, a tie counting 1/2 */
+    double p; /* two-sided p-value, in [0, 1] */
+    enum rb_analysis_mwu_method method; /* the one used: EXACT or NORMAL */
+    bool has_ties;
+};
+
+/* The two-sided Mann-Whitney U test of a against b (as SciPy's mannwhitneyu with
+ * alternative="two-sided"; method AUTO picks exact for more sizes than SciPy's "auto", which stops
+ * at 8). Exact: p = 2 P(U >= max(U1, U2)) under the null distribution, counted. Normal:
+ * z = (max(U1, U2) - n1 n2 / 2 - 1/2) / sigma, sigma^2 = n1 n2 / 12 ((n + 1) - sum(t^3 - t) /
+ * (n (n - 1))) over groups of t tied values, p = erfc(z / sqrt 2); 1 when every value is tied.
+ * Fails with RB_E_INVALID for an empty sample, a NaN, or EXACT with ties; RB_E_NOMEM. The inputs
+ * are not changed; the same inputs give the same bits. */
+enum rb_status rb_analysis_mann_whitney(const double *a, size_t a_count, const double *b,
+                                        size_t b_count, enum rb_analysis_mwu_method method,
+                                        struct rb_analysis_mwu *out, struct rb_err *err);
+
+/* The smallest two-sided p-value the exact test can give for samples of these sizes:
+ * 2 / C(a_count + b_count, a_count), at most 1 (1 when either is empty). A verdict needs it to be
+ * below alpha: 3 runs against 3 can never show a difference at alpha 0.05 (0.1), 4 against 4 can
+ * (0.029). */
+double rb_analysis_mwu_min_p(size_t a_count, size_t b_count);
+
+/* The median of count values (the mean of the middle two for an even count; NaN for none),
+ * sorting values in place. */
+double rb_analysis_median(double *values, size_t count);
+
+enum rb_analysis_verdict {
+    RB_ANALYSIS_VERDICT_INVALID = 0,
+    RB_ANALYSIS_SAME,         /* no significant change beyond the threshold */
+    RB_ANALYSIS_FASTER,       /* p < alpha and the median fell by more than the threshold */
+    RB_ANALYSIS_SLOWER,       /* p < alpha and the median rose by more than the threshold */
+    RB_ANALYSIS_TOO_FEW_RUNS, /* rb_analysis_mwu_min_p >= alpha: no verdict is possible */
+    RB_ANALYSIS_ONLY_BASE,    /* the series is in the base set alone */
+    RB_ANALYSIS_ONLY_NEW,     /* in the new set alone */
+};
+/* "same", "faster", "slower", "too few runs", "only in base", "only in new". */
+const char *rb_analysis_verdict_name(enum rb_analysis_verdict v);
+
+/* The decision rule. alpha 0 is not a valid level and threshold 0 is (any significant slowdown
+ * counts), so there is no zero default: start from RB_ANALYSIS_TIMING_DESC_INIT. */
+struct rb_analysis_timing_desc {
+    double alpha;         /* in (0, 1) */
+    double threshold_pct; /* >= 0: a change of the medians within +-threshold_pct is "same" */
+};
+#define RB_ANALYSIS_TIMING_DESC_INIT                                                               \
+    {                                                                                              \
+        .alpha = 0.05, .threshold_pct = 5.0                                                        \
+    }
+
+/* One series compared: a pass, or the frame's wall time. */
+struct rb_analysis_timing_row {
+    char name[32];
+    size_t base_count, new_count;         /* runs (0: the series is not in that set) */
+    double base_median_ms, new_median_ms; /* NaN where the count is 0 */
+    double change_pct;           /* 100 (new - base) / base; 0 when both are 0, INFINITY from 0, NaN
+                                  * when a side is missing */
+    struct rb_analysis_mwu test; /* zeroed (p = NaN) when a side is missing */
+    enum rb_analysis_verdict verdict;
+};
+
+/* Compares one series, base values against new values (either count may be 0: the verdict is
+ * then ONLY_*). The values are not changed. Fails with RB_E_INVALID for a bad desc or a NaN. */
+enum rb_status rb_analysis_timing_compare(const char *name, const double *base, size_t base_count,
+                                          const double *new_values, size_t new_count,
+                                          const struct rb_analysis_timing_desc *desc,
+                                          struct rb_analysis_timing_row *out, struct rb_err *err);
+
+/* A bench directory loaded: bench.json and, per series, one sample a run: the mean over the
+ * run's frames of the pass's time (gpu_ms, or cpu_ms for a pass that runs on the CPU; 0 in a
+ * frame that did not record it), in ms per frame. The mean is the run's sum in per-frame units,
+ * so a pass slower in a few frames only moves it too (a median over frames would hide that); an
+ * odd frame is one rank among the runs, the unit the test treats as independent. */
+struct rb_analysis_timing_series {
+    char name[32];      /* the pass; RB_ANALYSIS_WALL for the frame's wall_ms */
+    double *per_run_ms; /* bench.run_count values, run 1 first */
+};
+#define RB_ANALYSIS_WALL "frame wall"
+
+struct rb_analysis_timing_set {
+    char dir[1024];
+    struct rb_io_bench bench;
+    struct rb_analysis_timing_series *series; /* the passes in order of appearance, then wall */
+    size_t series_count;
+};
+
+/* Loads dir/bench.json and every run's sidecars (the *.timing.json files in dir/run-01,
+ * dir/run-02, ...). Each run must hold one sidecar for each frame bench.json lists, recorded on its
+ * device and driver. Fails with the readers' status and a message naming the file (RB_E_IO,
+ * RB_E_PARSE), RB_E_INVALID for a run that does not match bench.json, RB_E_NOMEM; *out only on
+ * success. */
+enum rb_status rb_analysis_timing_set_load(const char *dir, struct rb_analysis_timing_set **out,
+                                           struct rb_err *err);
+void rb_analysis_timing_set_destroy(struct rb_analysis_timing_set *s);
+
+/* RB_OK when the two sets can be compared: the same device, driver, job hash and frames;
+ * otherwise RB_E_INVALID and a message naming what differs and both values. */
+enum rb_status rb_analysis_timing_sets_match(const struct rb_analysis_timing_set *base,
+                                             const struct rb_analysis_timing_set *new_set,
+                                             struct rb_err *err);
+
+/* Compares every series of the two sets: the base set's in order, then those only in the new
+ * set. *rows (count in *row_count) is freed with free(); written only on success. */
+enum rb_status rb_analysis_timing_compare_sets(const struct rb_analysis_timing_set *base,
+                                               const struct rb_analysis_timing_set *new_set,
+                                               const struct rb_analysis_timing_desc *desc,
+                                               struct rb_analysis_timing_row **rows,
+                                               size_t *row_count, struct rb_err *err);
 
 #endif

@@ -139,4 +139,46 @@ struct rb_io_timing {
 enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t,
                                   struct rb_err *err);
 
+/* ---- reading timing sidecars, and bench sets (timing.c) --------------------------------- */
+
+/* A timing sidecar read back: the fields raybundle timing compare needs. */
+struct rb_io_timing_file {
+    int frame;
+    struct rb_pass_time *passes; /* pass_count entries, owned; gpu_ms, cpu_ms and count */
+    size_t pass_count;
+    double wall_ms;
+    char device[256], driver[256];
+};
+
+/* Reads a sidecar as rb_io_timing_write writes it into *out (released with
+ * rb_io_timing_file_release, also after a failure). RB_E_IO when it cannot be opened,
+ * RB_E_PARSE for bad JSON ("path:line:col: ...") or a missing or mistyped field (named by its
+ * JSON path, e.g. 'passes[2].gpu_ms'). */
+enum rb_status rb_io_timing_read(const char *path, struct rb_io_timing_file *out,
+                                 struct rb_err *err);
+void rb_io_timing_file_release(struct rb_io_timing_file *t);
+
+/* bench.json, what raybundle bench records beside its runs' sidecars (run-01/, run-02/, ...). */
+struct rb_io_bench {
+    char device[256], driver[256]; /* as in the sidecars */
+    char build[128];               /* "raybundle 0.1.0 (git describe)" */
+    char job[1024];                /* the job file as given */
+    char job_hash[17];             /* 16 hex digits, as the EXR's raybundle:jobHash */
+    char integrator[32];
+    uint32_t width_px, height_px;
+    uint32_t run_count;
+    char order[32]; /* how runs were interleaved: "run-by-run" */
+    int *frames;    /* the frames each run rendered, in order; owned */
+    size_t frame_count;
+    char **options; /* the command line after 'bench', as given; owned */
+    size_t option_count;
+};
+
+/* Writes bench.json atomically (2-space indented JSON). */
+enum rb_status rb_io_bench_write(const char *path, const struct rb_io_bench *b, struct rb_err *err);
+/* Reads bench.json into *out (released with rb_io_bench_release, also after a failure); fails
+ * as rb_io_timing_read does. */
+enum rb_status rb_io_bench_read(const char *path, struct rb_io_bench *out, struct rb_err *err);
+void rb_io_bench_release(struct rb_io_bench *b);
+
 #endif

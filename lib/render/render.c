@@ -33,9 +33,10 @@ struct rb_render {
     struct rb_reference *ref;
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
     void *user;
-    bool was_stopped; /* on_pass said stop during this frame */
-    bool strict;      /* desc->strict */
-    char hash[17];    /* the setup's job hash, as the EXR records it */
+    bool was_stopped;    /* on_pass said stop during this frame */
+    bool strict;         /* desc->strict */
+    bool is_timing_only; /* the sidecar alone: no EXR, no preview (bench) */
+    char hash[17];       /* the setup's job hash, as the EXR records it */
     char device[256], driver[256];
     float *scratch; /* the writer's copies of layers for the EXR and the preview */
 
@@ -83,6 +84,7 @@ enum rb_status rb_render_create(const struct rb_render_desc *desc, struct rb_ren
     r->on_pass = desc->on_pass;
     r->strict = desc->strict;
     r->user = desc->user;
+    r->is_timing_only = desc->is_timing_only;
     snprintf(r->hash, sizeof(r->hash), "%016llx", (unsigned long long)desc->setup->job_hash);
     enum rb_status st = RB_OK;
     r->scratch = malloc((size_t)job->width_px * job->height_px * RB_OUT_FLOATS * sizeof(float));
@@ -340,8 +342,9 @@ static void *writer_main(void *arg)
         enum rb_status st = RB_OK;
         if (r->write_st == RB_OK) /* after a failure, nothing more is written */
             (void)((st = rb_io_make_parent_dirs(e->path, &err)) ||
-                   (st = write_exr(r, e->path, &e->f, &err)) ||
-                   (r->job->color.preview && (st = write_preview(r, e->path, &e->f, &err))) ||
+                   (!r->is_timing_only && (st = write_exr(r, e->path, &e->f, &err))) ||
+                   (!r->is_timing_only && r->job->color.preview &&
+                    (st = write_preview(r, e->path, &e->f, &err))) ||
                    (st = write_timing(r, e->path, &e->f, e->wall_ms, &err)));
         pthread_mutex_lock(&r->lock);
         if (st && r->write_st == RB_OK) {

@@ -23,6 +23,7 @@ struct rb_render_desc {
     bool strict;           /* bdpt: a full ray-bundle node buffer fails the frame (nothing of it
                             * is written) instead of a warning and a flag in the sidecar */
     uint32_t thread_count; /* reference: worker threads; 0: every core */
+    bool is_timing_only;   /* write the timing sidecar alone (raybundle bench): no EXR, PNG */
     /* reference: called after each pass of samples; returning false stops the frame, which is
      * then partial and not written. May be NULL. */
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);

@@ -51,6 +51,14 @@ stderr_has() { # stderr_has TEXT DESCRIPTION
     fi
 }
 
+stdout_has() { # stdout_has REGEX DESCRIPTION (grep's basic regular expression)
+    if grep -q -- "$1" "$T/stdout"; then
+        ok "$2"
+    else
+        not_ok "$2" "stdout lacks /$1/" "stdout: $(head -c 3000 "$T/stdout")"
+    fi
+}
+
 # tap_run COMMAND...: runs another TAP producer and renumbers its lines into this script's
 # count; a non-zero exit without a failing line is a failure of its own.
 tap_run() {

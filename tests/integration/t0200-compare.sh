@@ -9,14 +9,6 @@
 value() {
     sed -n "s/^$1  *\([^ ]*\).*/\1/p" "$T/stdout"
 }
-has_line() { # has_line REGEX DESCRIPTION (on stdout)
-    if grep -q -- "$1" "$T/stdout"; then
-        ok "$2"
-    else
-        not_ok "$2" "stdout lacks /$1/" "stdout: $(head -c 2000 "$T/stdout")"
-    fi
-}
-
 # ---- usage ---------------------------------------------------------------------------------
 
 rb compare --help
@@ -72,8 +64,8 @@ expect_exit 0 "identical images exit 0"
 for kv in "pixels 256" "rmse 0" "relmse 0" "mae 0" "psnr inf"; do
     check "identical images: ${kv% *} is ${kv#* }" test "$(value "${kv% *}")" = "${kv#* }"
 done
-has_line '^max_error  *0 at (0, 0)$' "identical images: max_error 0 at (0, 0)"
-has_line '^layer  *beauty (R, G, B)$' "the layer line names the channels"
+stdout_has '^max_error  *0 at (0, 0)$' "identical images: max_error 0 at (0, 0)"
+stdout_has '^layer  *beauty (R, G, B)$' "the layer line names the channels"
 
 # 0.75 against 0.5: (a-b)^2 = 1/16, relMSE = (1/16) / (1/4 + 1/100), PSNR = 10 log10(4).
 rb compare "$T/c.exr" "$T/a.exr"
@@ -81,12 +73,12 @@ expect_exit 0 "a constant offset exits 0"
 for kv in "rmse 0.25" "relmse 0.240384615" "mae 0.25" "psnr 6.02059991"; do
     check "constant offset: ${kv% *} is ${kv#* }" test "$(value "${kv% *}")" = "${kv#* }"
 done
-has_line '^psnr  *6.02059991 dB$' "psnr is in dB"
+stdout_has '^psnr  *6.02059991 dB$' "psnr is in dB"
 rb compare "$T/c.exr" "$T/a.exr" --epsilon 0.75
 check "--epsilon 0.75 gives relmse 1/16" test "$(value relmse)" = "0.0625"
 
 rb compare "$T/out.exr" "$T/a.exr"
-has_line '^max_error  *0.5 at (3, 5)$' "one outlier: max_error 0.5 at (3, 5)"
+stdout_has '^max_error  *0.5 at (3, 5)$' "one outlier: max_error 0.5 at (3, 5)"
 rb compare "$T/out.exr" "$T/a.exr" --mask "$T/mask.exr"
 expect_exit 0 "--mask exits 0"
 check "--mask leaves 255 pixels" test "$(value pixels)" = 255
@@ -131,7 +123,7 @@ mk nan --pattern constant:color=0.5,0.5,0.5 16x16 3 --fill:color=nan,0.5,0.5 1x1
 rb compare "$T/nan.exr" "$T/a.exr"
 expect_exit 0 "a NaN pixel without a threshold exits 0"
 check "the NaN pixel is skipped" test "$(value pixels)" = 255
-has_line '^nonfinite  *1 pixels skipped$' "the NaN pixel is counted"
+stdout_has '^nonfinite  *1 pixels skipped$' "the NaN pixel is counted"
 stderr_has "warning: 1 pixels hold NaN or infinite values" "the NaN pixel is warned about"
 rb compare "$T/nan.exr" "$T/a.exr" --max-rmse 1
 expect_exit 1 "a NaN pixel fails a threshold"
@@ -174,7 +166,7 @@ check "--mask-alpha keeps the 128 opaque pixels" test "$(value pixels)" = 128
 check "--mask-alpha hides the transparent outlier" test "$(value rmse)" = 0
 
 rb compare "$T/depth_out.exr" "$T/depth.exr"
-has_line '^max_error  *0.5 at (8, 3)$' "the outlier on the depth step is found"
+stdout_has '^max_error  *0.5 at (8, 3)$' "the outlier on the depth step is found"
 rb compare "$T/depth_out.exr" "$T/depth.exr" --exclude-edges 1
 expect_exit 0 "--exclude-edges exits 0"
 check "--exclude-edges 1 drops the two columns at the step" test "$(value pixels)" = 224
@@ -208,7 +200,7 @@ rb compare "$seq" "$seq" --frames 0-1
 expect_exit 0 "a sequence against itself exits 0"
 check "a sequence against itself: relmse 0" test "$(value relmse)" = 0
 check "a sequence counts the pixels of both frames" test "$(value pixels)" = 4608
-has_line '^frames  *0-1$' "the text names the frame range"
+stdout_has '^frames  *0-1$' "the text names the frame range"
 check "the per-frame table has one row a frame" test "$(grep -c '^  *[01]  *2304 ' "$T/stdout")" = 2
 rb compare "$seq" "$seq" --frames 0-1 --max-relmse 0
 expect_exit 0 "relmse 0 passes --max-relmse 0"
@@ -240,7 +232,7 @@ expect_exit 2 "a sequence's --error-image needs a '#' run"
 
 rb compare "$seq" "$seq" --frames 0-1 --layer direct
 expect_exit 0 "--layer direct on rendered frames exits 0"
-has_line '^layer  *direct (direct.R, direct.G, direct.B)$' "--layer direct compares direct.R/G/B"
+stdout_has '^layer  *direct (direct.R, direct.G, direct.B)$' "--layer direct compares direct.R/G/B"
 rb compare "$T/r/frame.0001.exr" "$T/r/frame.0000.exr" --layer depth --mask-alpha
 expect_exit 0 "--layer depth --mask-alpha on rendered frames exits 0"
 geometry=$(value pixels)

@@ -27,15 +27,6 @@
 
 static char tmpdir[512];
 
-/* cmocka 1.1's assert_float_equal works in float; these answers are checked in double. */
-#define assert_double_equal(a, b, tol) check_near((a), (b), (tol), #a, __FILE__, __LINE__)
-
-static void check_near(double a, double b, double tol, const char *expr, const char *file, int line)
-{
-    if (!(fabs(a - b) <= tol))
-        fail_msg("%s:%d: %s is %.17g, want %.17g (within %g)", file, line, expr, a, b, tol);
-}
-
 static int group_setup(void **state)
 {
     (void)state;

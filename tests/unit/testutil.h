@@ -54,4 +54,18 @@ static inline int rb_test_scene(char *buf, size_t size, const char *rel)
     return access(buf, R_OK) == 0 ? 0 : -1;
 }
 
+#ifdef fail_msg /* after <cmocka.h> */
+#include <math.h>
+
+/* cmocka 1.1's assert_float_equal works in float; this checks doubles within tol. */
+#define assert_double_equal(a, b, tol) rb_test_near((a), (b), (tol), #a, __FILE__, __LINE__)
+
+static inline void rb_test_near(double a, double b, double tol, const char *expr, const char *file,
+                                int line)
+{
+    if (!(fabs(a - b) <= tol))
+        fail_msg("%s:%d: %s is %.17g, want %.17g (within %g)", file, line, expr, a, b, tol);
+}
+#endif
+
 #endif
