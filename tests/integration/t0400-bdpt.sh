@@ -1,9 +1,10 @@
 #!/bin/sh
 # The bdpt integrator (seed 000): it renders validation-clean, its timing sidecar names every
 # pass of the seed's pipeline, its output is the same bits whatever lavapipe's thread count, a
-# full ray-bundle node buffer is reported (warning, sidecar flag, exit 1 under --strict), and
-# its indirect light converges to the reference's bdpt path space as VPLs and bundles are added,
-# by each strategy alone and by MIS.
+# full ray-bundle node buffer is reported (warning, sidecar flag, exit 1 under --strict), its
+# indirect light converges to the reference's bdpt path space as VPLs and bundles are added, by
+# each strategy alone and by MIS, the interleaving filter brings it closer, and a chunk of a
+# sequence has the bits of the same frames of a whole run.
 . tests/integration/lib.sh
 
 small="--frames 0 --size 64x36 -q"
@@ -86,6 +87,24 @@ for s in mis vpl bundle; do
 done
 check "MIS has the lowest relMSE of the three strategies" \
     awk "BEGIN { exit !($(relmse "$T/mis") <= $(relmse "$T/vpl") && $(relmse "$T/mis") <= $(relmse "$T/bundle")) }"
+
+# Interleaving: at equal VPL and bundle counts, the geometry-aware filter over the sub-images'
+# estimates brings the indirect light closer to the reference than the gathered image alone.
+rb render jobs/demo.yaml $small $maps --integrator bdpt --out "$T/f0" \
+    --set integrator.bdpt.filter_radius=0
+expect_exit 0 "bdpt without the filter"
+ef=$(relmse "$T/b")
+eu=$(relmse "$T/f0")
+echo "# indirect relMSE with 21 VPLs and bundles: filtered $ef, unfiltered $eu"
+check "the filtered image is closer to the reference ($ef < $eu)" awk "BEGIN { exit !($ef < $eu) }"
+
+# Chunks: frame 2 rendered alone (its history warmed up) equals frame 2 of a run of 0-2.
+rb render jobs/demo.yaml --frames 0-2 --size 64x36 -q $maps --integrator bdpt --out "$T/whole"
+expect_exit 0 "bdpt renders frames 0-2"
+rb render jobs/demo.yaml --frames 2 --size 64x36 -q $maps --integrator bdpt --out "$T/chunk"
+expect_exit 0 "bdpt renders frame 2 alone"
+check "frame 2 alone has the bits of frame 2 of the whole run" \
+    cmp -s "$T/whole/frame.0002.exr" "$T/chunk/frame.0002.exr"
 
 # The area-lit Cornell box: lit by its emissive quad alone, through the bundles.
 if have_scene cornell-box/CornellBox.glb; then
