@@ -1,7 +1,8 @@
 #!/bin/sh
 # Benchmark (not a test): renders the demo at 640x360 for 24 frames and prints each pass's
-# median GPU milliseconds, frames per second and peak resident memory; then the CPU reference's
-# speed, and its error on the Cornell box at 64 to 1024 spp.
+# median GPU milliseconds, frames per second and peak resident memory; the same frames as a Slurm
+# array against one process; then the CPU reference's speed, and its error on the Cornell box at
+# 64 to 1024 spp.
 set -eu
 BUILD=${BUILD:-build}
 out=$(mktemp -d "${TMPDIR:-/tmp}/raybundle-bench.XXXXXX")
@@ -30,6 +31,18 @@ gpu=$(cat "$out"/frame.*.timing.json | sed -n 's/.*"gpu_total_ms": \([0-9.eE+-]*
 awk -v w="$wall" -v g="$gpu" 'BEGIN { printf "frame wall median %.1f ms, GPU passes median %.1f ms: wall / GPU %.2f\n", w, g, w / g }'
 awk -v s="$start" -v e="$end" -v f="$frames" 'BEGIN { printf "frames per second (whole run, incl. start-up and EXR writes): %.2f\n", f / (e - s) }'
 echo "peak resident memory: $(cat "$out/rss") KiB"
+
+# The same frames as a Slurm array of 4 tasks on a one-node cluster (make check-farm's, which
+# checks the bits too) against one process: only where Slurm is installed and this is root.
+if [ "$(id -u)" = 0 ] && command -v slurmctld >/dev/null && command -v slurmd >/dev/null &&
+    command -v sbatch >/dev/null && command -v munged >/dev/null; then
+    RB_FARM_SIZE=640x360 RB_FARM_FRAMES=0-23 sh tests/farm/slurm.sh >"$out/farm.tap" 2>&1 &&
+        farm=ok || farm="FAILED (make check-farm says why)"
+    sed -n 's/^# wall /slurm array wall time: /p' "$out/farm.tap"
+    echo "slurm array frames identical to one process's: $farm"
+else
+    echo "slurm array wall time: skipped (needs root and slurm-wlm: scripts/install-deps.sh --farm)"
+fi
 
 # The CPU reference: the demo at 320x180, 64 spp, with 1 and 2 threads.
 for threads in 1 2; do
