@@ -434,6 +434,8 @@ static int run(struct options *o, int argc, char **argv)
 {
     int rc = parse_options(argc, argv, o);
     if (rc) {
+        if (rc < 0 && o->is_openjd)
+            openjd("openjd_fail: %s", cmd_last_error);
         rb_render_frames_release(&o->frames);
         return rc > 0 ? RB_EXIT_OK : RB_EXIT_USAGE;
     }
@@ -635,12 +637,12 @@ out:
 
 int cmd_render(int argc, char **argv)
 {
-    struct options o = {.command = "render"};
+    struct options o = {.command = "render", .frames = RB_RENDER_FRAMES_INIT};
     return run(&o, argc, argv);
 }
 
 int cmd_reference(int argc, char **argv)
 {
-    struct options o = {.command = "reference"};
+    struct options o = {.command = "reference", .frames = RB_RENDER_FRAMES_INIT};
     return run(&o, argc, argv);
 }

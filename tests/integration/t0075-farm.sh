@@ -67,6 +67,12 @@ check "openjd: progress 0, 33, 66, 100 in order" \
     test "$(sed -n 's/^openjd_progress: //p' "$T/stdout" | tr '\n' ' ')" = "0 33 66 100 "
 check "openjd: no progress lines on stderr" sh -c "! grep -q 'frame 7 (2/3)' '$T/stderr'"
 
+# Without --frames, the chunk is of the job's range (the demo's 0-47).
+rb render jobs/demo.yaml --out "$T/jobrange" --size 32x18 --chunk 3/4 -q
+expect_exit 0 "--chunk 3/4 of the job's range renders"
+check "--chunk 3/4 of the job's 48 frames is 36-47" \
+    grep -q "^12 frames (36-47, chunk 3/4) in " "$T/stdout"
+
 # More chunks than frames: the last chunks are empty, and succeed.
 rb render jobs/demo.yaml --out "$T/empty" --frames 0-1 --chunk 3/4 $args
 expect_exit 0 "an empty chunk exits 0"
@@ -78,6 +84,12 @@ check "an empty chunk writes nothing" test ! -e "$T/empty"
 rb render jobs/demo.yaml --out "$T/file/sub" --frames 0 --progress=openjd -q
 expect_exit 2 "an unwritable output exits 2 under --progress=openjd"
 check "openjd_fail names the cause" grep -q "^openjd_fail: cannot create directory" "$T/stdout"
+
+# Bad usage under --progress=openjd ends with openjd_fail too.
+rb render jobs/demo.yaml --progress=openjd --frames 1,,2
+expect_exit 2 "a bad list under --progress=openjd exits 2"
+check "openjd_fail names the bad list" grep -q "^openjd_fail: --frames '1,,2': an empty entry" \
+    "$T/stdout"
 
 # Bad lists and chunks: status 2, the bad entry named, nothing written.
 bad_option "--frames '1-3,x,5': 'x' is not a frame" --frames 1-3,x,5
