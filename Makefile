@@ -68,7 +68,7 @@ DEPS := $(LIB_OBJ:.o=.d) $(CMD_OBJ:.o=.d) $(UNIT_BIN:=.d) $(TOOL_BIN:=.d) \
 
 DEPS_STAMP := $(BUILD)/.deps-ok
 
-.PHONY: all test check bench demo install uninstall clean lint format deps fuzz update-golden
+.PHONY: all test check check-farm bench demo install uninstall clean lint format deps fuzz update-golden
 .SECONDARY: $(SPV_H)
 all: $(BUILD)/raybundle
 
@@ -190,6 +190,11 @@ fuzz:
 test check: $(BUILD)/raybundle $(BUILD)/mkdemo $(UNIT_BIN) $(TOOL_BIN) $(FUZZ_REPLAY) \
 		$(FUZZ_SAN_BIN)
 	$(Q)BUILD=$(BUILD) tests/run.sh
+
+# jobs/slurm-array.sh on a one-node Slurm cluster this machine starts (root; installs slurm-wlm
+# and munge through scripts/install-deps.sh --farm). Not in `make check`: CI runs it after.
+check-farm: $(BUILD)/raybundle
+	$(Q)BUILD=$(BUILD) tests/run.sh tests/farm/slurm.sh
 
 bench: $(BUILD)/raybundle
 	$(Q)BUILD=$(BUILD) tests/bench.sh

@@ -48,5 +48,7 @@ void cmd_end_bar(void);
 
 /* Prints "raybundle: error: <msg>" to stderr (after ending an open progress line). */
 void cmd_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+/* The last message cmd_error printed (cut to fit), for a farm's failure line. */
+extern char cmd_last_error[512];
 
 #endif

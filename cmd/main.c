@@ -24,6 +24,7 @@ static const struct command commands[] = {
 };
 
 bool cmd_bar_open;
+char cmd_last_error[512];
 
 void cmd_end_bar(void)
 {
@@ -36,6 +37,9 @@ void cmd_error(const char *fmt, ...)
 {
     va_list ap;
     cmd_end_bar();
+    va_start(ap, fmt);
+    vsnprintf(cmd_last_error, sizeof(cmd_last_error), fmt, ap);
+    va_end(ap);
     va_start(ap, fmt);
     fputs("raybundle: error: ", stderr);
     vfprintf(stderr, fmt, ap);

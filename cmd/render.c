@@ -7,6 +7,7 @@
 #include <getopt.h>
 #include <math.h>
 #include <signal.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -51,10 +52,13 @@ struct options {
     bool resume, validate, preview, quiet;
     bool is_lenient; /* --lenient: glTF type errors are warnings */
     bool is_strict;  /* --strict: a full ray-bundle node buffer fails the frame */
+    bool is_openjd;  /* --progress=openjd: OpenJD progress messages on stdout */
     int verbose;
-    const char *command; /* "render", "reference" or "bench" */
-    const char *runs;    /* bench: --runs as given */
-    bool is_timing_only; /* bench: timing sidecars alone, no images */
+    struct rb_render_frames frames; /* --frames' list; no ranges: the job's range */
+    struct rb_render_chunk chunk;   /* --chunk; count 0: all the frames */
+    const char *command;            /* "render", "reference" or "bench" */
+    const char *runs;               /* bench: --runs as given */
+    bool is_timing_only;            /* bench: timing sidecars alone, no images */
     /* Text behind the options that are sugar for --set (--frames, --size, ...). */
     char frames_start[32], frames_end[32], size_value[48];
     char frames_origin[64], size_origin[64], integrator_origin[64], spp_origin[64],
@@ -83,13 +87,18 @@ static void usage(FILE *f, const char *command)
                    "OpenEXR images with timing sidecars.\n"
                    "\n");
     fprintf(f,
-            "  --frames A-B         render frames A to B (or one frame: A); sets frames.*\n"
+            "  --frames LIST        render frames A-B, or a list such as 1-3,5,7-20:2 (A-B:S\n"
+            "                       steps by S); sets frames.* to its first and last frame\n"
+            "  --chunk I/N          render the I-th (from 0) of N even, contiguous chunks of\n"
+            "                       the frames; 'slurm': SLURM_ARRAY_TASK_ID's of _COUNT\n"
             "  --size WxH           set the resolution\n"
             "  --output PATTERN     override the output pattern (#### = frame number)\n"
             "  --out DIR            write into DIR, keeping the pattern's file name\n"
             "  --integrator NAME    set integrator.name: direct or reference (render only)\n"
             "  --set KEY=VALUE      override any job key by its dotted path (repeatable)\n"
             "  --resume             skip frames whose files are already complete\n"
+            "  --progress MODE      auto (a bar on a terminal, lines otherwise) or openjd\n"
+            "                       (openjd_progress and openjd_status lines on stdout)\n"
             "  --preview            also write NAME.####.png through OpenColorIO\n"
             "  --device NAME|INDEX  pick a Vulkan device (default: lavapipe)\n"
             "  --validate           enable the Khronos validation layer; any message fails\n"
@@ -115,27 +124,42 @@ static int add_override(struct options *o, const char *key, const char *value, c
     return 0;
 }
 
-/* --frames A-B or A: frames.start and frames.end, checked by the job's key table. A leading
- * '-' belongs to A, so "-3" is a start of -3, which the table refuses. */
+/* --frames LIST (A, A-B, A-B:S, comma-separated, as farms write them): its first and last frame
+ * set frames.start and frames.end, checked by the job's key table; the list picks frames
+ * between them. A later --frames replaces an earlier one. */
 static int sugar_frames(struct options *o, const char *arg)
 {
-    snprintf(o->frames_origin, sizeof(o->frames_origin), "--frames '%s'", arg);
-    const char *dash = arg[0] ? strchr(arg + 1, '-') : NULL;
-    size_t a = dash ? (size_t)(dash - arg) : strlen(arg);
-    const char *end = dash ? dash + 1 : arg;
-    if (!arg[0] || a >= sizeof(o->frames_start) || strlen(end) >= sizeof(o->frames_end)) {
-        cmd_error("%s: expected A-B or A (frame numbers)", o->frames_origin);
+    snprintf(o->frames_origin, sizeof(o->frames_origin), "--frames '%.48s%s'", arg,
+             strlen(arg) > 48 ? "..." : "");
+    struct rb_err err = RB_ERR_INIT;
+    int first = 0, last = 0;
+    rb_render_frames_release(&o->frames);
+    if (rb_render_frames_parse(&o->frames, arg, &err) ||
+        !rb_render_frames_bounds(&o->frames, &first, &last)) {
+        cmd_error("%s: %s", o->frames_origin, err.msg);
         return -1;
     }
-    memcpy(o->frames_start, arg, a);
-    o->frames_start[a] = '\0';
-    memcpy(o->frames_end, end, strlen(end) + 1);
-    if (!o->frames_end[0]) {
-        cmd_error("%s: expected A-B or A, and B is missing", o->frames_origin);
-        return -1;
-    }
+    snprintf(o->frames_start, sizeof(o->frames_start), "%d", first);
+    snprintf(o->frames_end, sizeof(o->frames_end), "%d", last);
     return add_override(o, "frames.start", o->frames_start, o->frames_origin) ||
            add_override(o, "frames.end", o->frames_end, o->frames_origin);
+}
+
+/* --chunk I/N, or --chunk slurm: the chunk of this Slurm array task. */
+static int parse_chunk(struct options *o, const char *arg)
+{
+    struct rb_err err = RB_ERR_INIT;
+    enum rb_status st =
+        strcmp(arg, "slurm") == 0
+            ? rb_render_chunk_slurm(getenv("SLURM_ARRAY_TASK_ID"), getenv("SLURM_ARRAY_TASK_COUNT"),
+                                    getenv("SLURM_ARRAY_TASK_MIN"), getenv("SLURM_ARRAY_TASK_STEP"),
+                                    &o->chunk, &err)
+            : rb_render_chunk_parse(arg, &o->chunk, &err);
+    if (st) {
+        cmd_error("--chunk %s: %s", strcmp(arg, "slurm") == 0 ? "slurm" : "I/N", err.msg);
+        return -1;
+    }
+    return 0;
 }
 
 /* --size WxH: resolution [W, H], checked by the key table. */
@@ -169,7 +193,9 @@ static int parse_options(int argc, char **argv, struct options *o)
         O_TIME_LIMIT,
         O_THREADS,
         O_STRICT,
-        O_RUNS
+        O_RUNS,
+        O_CHUNK,
+        O_PROGRESS
     };
     static const struct option opts[] = {
         {"frames", required_argument, NULL, O_FRAMES},
@@ -188,6 +214,8 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"lenient", no_argument, NULL, O_LENIENT},
         {"strict", no_argument, NULL, O_STRICT},
         {"runs", required_argument, NULL, O_RUNS},
+        {"chunk", required_argument, NULL, O_CHUNK},
+        {"progress", required_argument, NULL, O_PROGRESS},
         {"quiet", no_argument, NULL, 'q'},
         {"verbose", no_argument, NULL, 'v'},
         {"help", no_argument, NULL, 'h'},
@@ -243,6 +271,14 @@ static int parse_options(int argc, char **argv, struct options *o)
                 return -1;
             }
             o->runs = optarg;
+            break;
+        case O_CHUNK: bad = parse_chunk(o, optarg); break;
+        case O_PROGRESS:
+            if (strcmp(optarg, "auto") != 0 && strcmp(optarg, "openjd") != 0) {
+                cmd_error("--progress expects auto or openjd, got '%s'", optarg);
+                return -1;
+            }
+            o->is_openjd = strcmp(optarg, "openjd") == 0;
             break;
         case 'q': o->quiet = true; break;
         case 'v': o->verbose++; break;
@@ -331,8 +367,50 @@ static int exit_for(enum rb_status st, bool rendering)
     return st == RB_E_VULKAN || st == RB_E_NOMEM ? RB_EXIT_FAILED : RB_EXIT_USAGE;
 }
 
-static void progress(bool tty, int done, int total, int frame, double sec_per_frame, bool skipped)
+/* What progress reports need to know, also inside a reference frame. */
+struct progress_state {
+    bool is_tty, is_openjd, is_quiet;
+    int done, total;
+    int percent; /* the last openjd_progress printed */
+};
+
+/* One of OpenJD's stdout messages ("openjd_progress: 40"), flushed, so a farm's agent reading a
+ * pipe sees it when it happens. */
+static void openjd(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+static void openjd(const char *fmt, ...)
 {
+    va_list ap;
+    va_start(ap, fmt);
+    vprintf(fmt, ap);
+    va_end(ap);
+    putchar('\n');
+    fflush(stdout);
+}
+
+/* openjd_progress for frames done out of total, plus fraction of the next: whole percent, printed
+ * when it changes; 100 only once every frame is done. */
+static void openjd_percent(struct progress_state *p, double fraction)
+{
+    int percent = (int)(((double)p->done + fraction) * 100.0 / p->total);
+    if (p->done < p->total && percent > 99)
+        percent = 99;
+    if (percent != p->percent)
+        openjd("openjd_progress: %d", percent);
+    p->percent = percent;
+}
+
+static void progress(struct progress_state *p, int frame, double sec_per_frame, bool skipped)
+{
+    bool tty = p->is_tty;
+    int done = p->done, total = p->total;
+    if (p->is_openjd) {
+        openjd("openjd_status: frame %d %s (%d/%d)", frame,
+               skipped ? "already complete, kept" : "rendered", done, total);
+        openjd_percent(p, 0.0);
+        return;
+    }
+    if (p->is_quiet)
+        return;
     if (tty) {
         int width = 30, fill = total ? done * width / total : width;
         double eta = sec_per_frame * (total - done);
@@ -360,11 +438,13 @@ static void output_dir(const char *pattern, char *dir, size_t size)
         rb_strlcpy(dir, "./", size);
 }
 
-/* Progress of a reference frame on a terminal; stops sampling once a signal came. */
+/* Progress of a reference frame on a terminal or to a farm; stops sampling once a signal came. */
 static bool on_reference_pass(void *user, uint32_t done, uint32_t total)
 {
-    const bool *tty = user;
-    if (*tty) {
+    struct progress_state *p = user;
+    if (p->is_openjd && total)
+        openjd_percent(p, (double)done / total);
+    else if (p->is_tty) {
         char line[80];
         snprintf(line, sizeof(line), "  %u/%u samples", done, total);
         fprintf(stderr, "\r%-66s", line); /* pad over the frame bar */
@@ -394,7 +474,11 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
     struct rb_render *r = NULL;
     float *env = NULL;
     uint32_t env_w = 0, env_h = 0;
-    bool tty = !o->quiet && isatty(STDERR_FILENO);
+    struct progress_state prog = {.is_tty = !o->quiet && !o->is_openjd && isatty(STDERR_FILENO),
+                                  .is_openjd = o->is_openjd,
+                                  .is_quiet = o->quiet,
+                                  .percent = -1};
+    bool tty = prog.is_tty;
     enum rb_status st;
     rc = RB_EXIT_OK;
 
@@ -418,8 +502,34 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
         rc = exit_for(st, false);
         goto out;
     }
-    /* The output pattern was checked against the range by the job parser and apply_cli. */
+    /* The frames: --frames' list or the job's range, within the job's range, then the chunk.
+     * The output pattern was checked against the range by the job parser and apply_cli. */
     int first = job->frame_start, last = rb_render_last_frame(job, scene);
+    char chunk_note[48] = "";
+    if (o->chunk.count)
+        snprintf(chunk_note, sizeof(chunk_note), ", chunk %u/%u", o->chunk.index, o->chunk.count);
+    if (!o->frames.range_count && (st = rb_render_frames_add(&o->frames, first, last, 1, &err))) {
+        cmd_error("%s", err.msg);
+        rc = RB_EXIT_FAILED;
+        goto out;
+    }
+    rb_render_frames_limit(&o->frames, first, last);
+    if (o->chunk.count)
+        rb_render_frames_chunk(&o->frames, o->chunk);
+    if (!rb_render_frames_bounds(&o->frames, &first, &last)) {
+        if (!o->chunk.count) { /* a --set of frames.* after --frames left none of its frames */
+            cmd_error("%s: none of its frames is in the job's range, %d to %d", o->frames_origin,
+                      first, last);
+            rc = RB_EXIT_USAGE;
+            goto out;
+        }
+        if (o->is_openjd)
+            openjd("openjd_status: chunk %u/%u has no frames", o->chunk.index, o->chunk.count);
+        printf("0 frames (chunk %u/%u of %d-%d): nothing to render\n", o->chunk.index,
+               o->chunk.count, first, last);
+        goto out;
+    }
+    prog.total = (int)rb_render_frames_count(&o->frames);
     unsigned threads = 0;
     if (o->threads)
         sscanf(o->threads, "%u", &threads);
@@ -435,7 +545,7 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
                                                         .thread_count = threads,
                                                         .is_timing_only = o->is_timing_only,
                                                         .on_pass = on_reference_pass,
-                                                        .user = &tty},
+                                                        .user = &prog},
                                &r, &err))) {
         cmd_error("%s", err.msg);
         rc = st == RB_E_UNSUPPORTED || st == RB_E_INVALID ? RB_EXIT_USAGE : exit_for(st, true);
@@ -449,11 +559,17 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
         goto out;
     }
 
-    int total = last - first + 1, done = 0, rendered = 0, skipped = 0, stale = 0;
+    int total = prog.total, rendered = 0, skipped = 0, stale = 0;
+    if (o->is_openjd) {
+        openjd("openjd_status: rendering %d frame%s (%d-%d%s)", total, total == 1 ? "" : "s", first,
+               last, chunk_note);
+        openjd_percent(&prog, 0.0);
+    }
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
     double started = rb_monotonic_s();
-    for (int f = first; f <= last; f++) {
+    /* In ascending order; the frame driver warms up before a frame that follows a gap. */
+    for (int f = first, more = 1; more; more = rb_render_frames_next(&o->frames, f, &f)) {
         if (interrupted) {
             cmd_error("interrupted: frames %d to %d were not rendered", f, last);
             rc = RB_EXIT_FAILED;
@@ -467,10 +583,9 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
         if (o->resume) {
             enum rb_render_verdict v = rb_render_resume_verdict(r, path);
             if (v == RB_RENDER_KEEP) {
-                done++;
+                prog.done++;
                 skipped++;
-                if (!o->quiet)
-                    progress(tty, done, total, f, 0.0, true);
+                progress(&prog, f, 0.0, true);
                 continue;
             }
             if (v == RB_RENDER_STALE) {
@@ -501,13 +616,12 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
         }
         if (f == abort_after && rb_render_flush(r, &err) == RB_OK)
             kill(getpid(), SIGKILL);
-        done++;
+        prog.done++;
         rendered++;
-        if (!o->quiet)
-            progress(tty, done, total, f, (rb_monotonic_s() - started) / rendered, false);
+        progress(&prog, f, (rb_monotonic_s() - started) / rendered, false);
         if (rendered == 1 && f < last &&
             ((st = rb_render_flush(r, &err)) ||
-             (st = rb_render_check_space(path, job->color.preview, last - f, &err)))) {
+             (st = rb_render_check_space(path, job->color.preview, total - prog.done, &err)))) {
             cmd_error("%s", err.msg);
             rc = RB_EXIT_FAILED;
             break;
@@ -534,14 +648,16 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
     } else if (rc == RB_EXIT_OK) {
         char dir[4096];
         output_dir(job->output, dir, sizeof(dir));
-        printf("%d frame%s (%d-%d) in %s: %d rendered", total, total == 1 ? "" : "s", first, last,
-               dir, rendered);
+        printf("%d frame%s (%d-%d%s) in %s: %d rendered", total, total == 1 ? "" : "s", first, last,
+               chunk_note, dir, rendered);
         if (o->resume)
             printf(", %d kept, %d rendered again (another job)", skipped, stale);
         printf(", %.1f s\n", rb_monotonic_s() - started);
     }
 out:
     cmd_end_bar();
+    if (rc != RB_EXIT_OK && o->is_openjd)
+        openjd("openjd_fail: %s", cmd_last_error);
     rb_render_destroy(r);
     free(env);
     rb_scene_destroy(scene);
@@ -553,26 +669,32 @@ out:
 static int run(struct options *o, int argc, char **argv)
 {
     int rc = parse_options(argc, argv, o);
-    if (rc)
-        return rc > 0 ? RB_EXIT_OK : RB_EXIT_USAGE;
-    return render_job(o, NULL);
+    if (rc) {
+        if (rc < 0 && o->is_openjd)
+            openjd("openjd_fail: %s", cmd_last_error);
+        rc = rc > 0 ? RB_EXIT_OK : RB_EXIT_USAGE;
+    } else {
+        rc = render_job(o, NULL);
+    }
+    rb_render_frames_release(&o->frames);
+    return rc;
 }
 
-int cmd_render_bench(int argc, char **argv, cmd_bench_fn on_run, void *user)
+/* cmd_render_bench's runs, with o's frames released by the caller. */
+static int bench_runs(struct options *o, int argc, char **argv, cmd_bench_fn on_run, void *user)
 {
-    struct options o = {.command = "bench", .is_timing_only = true};
-    int rc = parse_options(argc, argv, &o);
+    int rc = parse_options(argc, argv, o);
     if (rc)
         return rc > 0 ? RB_EXIT_OK : RB_EXIT_USAGE;
-    if (!o.out_dir || o.resume || o.preview) {
-        cmd_error(!o.out_dir ? "bench needs --out DIR, the directory of the set"
-                             : "bench renders every frame afresh and writes no images: "
-                               "--resume and --preview do not apply");
-        usage(stderr, o.command);
+    if (!o->out_dir || o->resume || o->preview) {
+        cmd_error(!o->out_dir ? "bench needs --out DIR, the directory of the set"
+                              : "bench renders every frame afresh and writes no images: "
+                                "--resume and --preview do not apply");
+        usage(stderr, o->command);
         return RB_EXIT_USAGE;
     }
     struct cmd_bench_run b = {
-        .out_dir = o.out_dir, .job_path = o.job_path, .runs = o.runs, .is_quiet = o.quiet};
+        .out_dir = o->out_dir, .job_path = o->job_path, .runs = o->runs, .is_quiet = o->quiet};
     char dir[4096];
     if ((rc = on_run(&b, user)))
         return rc;
@@ -581,21 +703,30 @@ int cmd_render_bench(int argc, char **argv, cmd_bench_fn on_run, void *user)
             cmd_error("--out '%s': the path is too long", b.out_dir);
             return RB_EXIT_USAGE;
         }
-        o.out_dir = dir;
-        if ((rc = render_job(&o, &b)) || (rc = on_run(&b, user)))
+        o->out_dir = dir;
+        if ((rc = render_job(o, &b)) || (rc = on_run(&b, user)))
             return rc;
     }
     return RB_EXIT_OK;
 }
 
+int cmd_render_bench(int argc, char **argv, cmd_bench_fn on_run, void *user)
+{
+    struct options o = {
+        .command = "bench", .is_timing_only = true, .frames = RB_RENDER_FRAMES_INIT};
+    int rc = bench_runs(&o, argc, argv, on_run, user);
+    rb_render_frames_release(&o.frames);
+    return rc;
+}
+
 int cmd_render(int argc, char **argv)
 {
-    struct options o = {.command = "render"};
+    struct options o = {.command = "render", .frames = RB_RENDER_FRAMES_INIT};
     return run(&o, argc, argv);
 }
 
 int cmd_reference(int argc, char **argv)
 {
-    struct options o = {.command = "reference"};
+    struct options o = {.command = "reference", .frames = RB_RENDER_FRAMES_INIT};
     return run(&o, argc, argv);
 }

@@ -1,6 +1,7 @@
 #!/bin/sh
 # Installs the Debian 12 packages raybundle needs to build, render and test, and nothing from
 # anywhere else. Fast when everything is present; the one list of packages is here.
+# --farm: also the single-node Slurm cluster `make check-farm` starts (slurm-wlm, munge).
 set -eu
 
 PACKAGES="
@@ -15,6 +16,9 @@ libyaml-dev libxxhash-dev libjansson-dev
 libcmocka-dev
 mandoc man-db time clang-format
 "
+if [ "${1:-}" = --farm ]; then
+    PACKAGES="$PACKAGES slurm-wlm munge"
+fi
 
 missing=""
 for p in $PACKAGES; do

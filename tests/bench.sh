@@ -1,8 +1,8 @@
 #!/bin/sh
 # Benchmark (not a test): renders the demo at 640x360 for 24 frames and prints each pass's
 # median GPU milliseconds, frames per second and peak resident memory; the timing compare of
-# the build against itself; then the CPU reference's speed, and its error on the Cornell box
-# at 64 to 1024 spp.
+# the build against itself; the same frames as a Slurm array against one process; then the CPU
+# reference's speed, and its error on the Cornell box at 64 to 1024 spp.
 set -eu
 BUILD=${BUILD:-build}
 out=$(mktemp -d "${TMPDIR:-/tmp}/raybundle-bench.XXXXXX")
@@ -43,6 +43,18 @@ echo "timing compare of this build against itself (demo 160x90, 4 frames, 9 runs
 status=0
 "$BUILD/raybundle" timing compare "$out/bench-base" "$out/bench-new" || status=$?
 echo "timing compare exit status: $status"
+
+# The same frames as a Slurm array of 4 tasks on a one-node cluster (make check-farm's, which
+# checks the bits too) against one process: only where Slurm is installed and this is root.
+if [ "$(id -u)" = 0 ] && command -v slurmctld >/dev/null && command -v slurmd >/dev/null &&
+    command -v sbatch >/dev/null && command -v munged >/dev/null; then
+    RB_FARM_SIZE=640x360 RB_FARM_FRAMES=0-23 sh tests/farm/slurm.sh >"$out/farm.tap" 2>&1 &&
+        farm=ok || farm="FAILED (make check-farm says why)"
+    sed -n 's/^# wall /slurm array wall time: /p' "$out/farm.tap"
+    echo "slurm array frames identical to one process's: $farm"
+else
+    echo "slurm array wall time: skipped (needs root and slurm-wlm: scripts/install-deps.sh --farm)"
+fi
 
 # The CPU reference: the demo at 320x180, 64 spp, with 1 and 2 threads.
 for threads in 1 2; do

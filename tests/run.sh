@@ -1,6 +1,6 @@
 #!/bin/sh
-# Runs every test: the cmocka unit programs (TAP) and the integration scripts (TAP), then
-# prints the total as the last line: "N passed, N failed".
+# Runs every test: the cmocka unit programs (TAP) and the integration scripts (TAP), or only the
+# TAP scripts named as arguments, then prints the total as the last line: "N passed, N failed".
 # Tests run with the Khronos validation layer (RB_VALIDATE=1): a validation message fails them.
 set -u
 BUILD=${BUILD:-build}
@@ -48,14 +48,20 @@ run() {
     fi
 }
 
-for t in "$BUILD"/tests/test_*; do
-    [ -x "$t" ] || continue
-    CMOCKA_MESSAGE_OUTPUT=TAP run "$t" "$t"
-done
-for t in tests/integration/t[0-9]*.sh; do
-    [ -f "$t" ] || continue
-    run "$t" sh "$t"
-done
+if [ $# -gt 0 ]; then # the scripts named (make check-farm)
+    for t in "$@"; do
+        run "$t" sh "$t"
+    done
+else
+    for t in "$BUILD"/tests/test_*; do
+        [ -x "$t" ] || continue
+        CMOCKA_MESSAGE_OUTPUT=TAP run "$t" "$t"
+    done
+    for t in tests/integration/t[0-9]*.sh; do
+        [ -f "$t" ] || continue
+        run "$t" sh "$t"
+    done
+fi
 
 [ -n "$failures" ] && echo "failed:$failures"
 if [ "$skipped" -gt 0 ]; then

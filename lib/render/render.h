@@ -6,6 +6,8 @@
 #ifndef RB_RENDER_RENDER_H
 #define RB_RENDER_RENDER_H
 
+#include <limits.h>
+
 #include "core/core.h"
 #include "job/job.h"
 #include "scene/scene.h"
@@ -78,6 +80,66 @@ enum rb_status rb_render_flush(struct rb_render *r, struct rb_err *err);
  * (EXR, sidecar, preview) would not fit on the output's file system, with 5% to spare. */
 enum rb_status rb_render_check_space(const char *path, bool has_preview, int frames_left,
                                      struct rb_err *err);
+
+/* ---- which frames: lists and chunks (frames.c) ------------------------------------------- */
+
+/* Frames start, start + step, ... up to end (inclusive). */
+struct rb_render_frame_range {
+    int start, end, step; /* end >= start, step >= 1 */
+};
+
+/* A set of frames: the union of ranges, seen through the window lo..hi. Iterated in ascending
+ * order, each frame once, whatever the ranges' order and overlaps. Caller storage:
+ * RB_RENDER_FRAMES_INIT (empty, no window), rb_render_frames_release. */
+struct rb_render_frames {
+    struct rb_render_frame_range *ranges;
+    size_t range_count, range_cap;
+    int lo, hi; /* only frames in lo..hi belong to the set */
+};
+#define RB_RENDER_FRAMES_INIT                                                                      \
+    {                                                                                              \
+        .lo = INT_MIN, .hi = INT_MAX                                                               \
+    }
+
+/* Adds a range; RB_E_INVALID when end < start or step < 1. */
+enum rb_status rb_render_frames_add(struct rb_render_frames *f, int start, int end, int step,
+                                    struct rb_err *err);
+/* Adds the ranges of a frame list as render farms write one (OpenJD, Deadline): entries
+ * separated by commas, each a frame "A", a range "A-B" (inclusive) or a stepped range "A-B:S";
+ * whole numbers >= 0, spaces around them allowed. RB_E_INVALID naming the bad entry; on failure
+ * f is released (empty). */
+enum rb_status rb_render_frames_parse(struct rb_render_frames *f, const char *text,
+                                      struct rb_err *err);
+void rb_render_frames_release(struct rb_render_frames *f);
+
+/* The smallest frame of the set greater than after (INT64_MIN: the first); false when none. */
+bool rb_render_frames_next(const struct rb_render_frames *f, int64_t after, int *frame);
+/* The first and last frame of the set; false when it is empty. */
+bool rb_render_frames_bounds(const struct rb_render_frames *f, int *first, int *last);
+/* How many frames the set holds (it counts them one by one). */
+uint64_t rb_render_frames_count(const struct rb_render_frames *f);
+/* Narrows the window to lo..hi (within the current one). */
+void rb_render_frames_limit(struct rb_render_frames *f, int lo, int hi);
+
+/* One of count contiguous chunks of a run's frames, numbered from 0. */
+struct rb_render_chunk {
+    uint32_t index, count; /* index < count */
+};
+/* Narrows f to the chunk: its n frames in ascending order are cut into count contiguous runs,
+ * the first n % count of n / count + 1 frames, the others of n / count, so the union of the
+ * chunks is f. Returns the chunk's frame count (0 for the last chunks when there are more
+ * chunks than frames). */
+uint64_t rb_render_frames_chunk(struct rb_render_frames *f, struct rb_render_chunk chunk);
+/* Parses "I/N" (0 <= I < N); RB_E_INVALID naming the text. */
+enum rb_status rb_render_chunk_parse(const char *text, struct rb_render_chunk *out,
+                                     struct rb_err *err);
+/* The chunk of a Slurm array task, from the values of SLURM_ARRAY_TASK_ID and
+ * SLURM_ARRAY_TASK_COUNT (required) and SLURM_ARRAY_TASK_MIN and SLURM_ARRAY_TASK_STEP (NULL:
+ * 0 and 1): index (ID - MIN) / STEP of COUNT. RB_E_INVALID naming the variable when one is unset,
+ * malformed, or the task is not on that grid. */
+enum rb_status rb_render_chunk_slurm(const char *task_id, const char *task_count,
+                                     const char *task_min, const char *task_step,
+                                     struct rb_render_chunk *out, struct rb_err *err);
 
 /* Loads an environment map as RGBA floats (RGB gets A = 1; one channel is grey), freed with
  * free(). Fails with the image reader's status, the path named. */

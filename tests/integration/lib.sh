@@ -59,6 +59,17 @@ stdout_has() { # stdout_has REGEX DESCRIPTION (grep's basic regular expression)
     fi
 }
 
+# bad_option MESSAGE OPTION...: rendering the demo with OPTION... exits 2, says MESSAGE on
+# stderr, and writes nothing (the output directory is not even created).
+bad_option() {
+    msg=$1
+    shift
+    rb render jobs/demo.yaml --out "$T/never" -q "$@"
+    expect_exit 2 "$* exits 2"
+    stderr_has "$msg" "$*: explained"
+    check "$*: nothing written" test ! -e "$T/never"
+}
+
 # tap_run COMMAND...: runs another TAP producer and renumbers its lines into this script's
 # count; a non-zero exit without a failing line is a failure of its own.
 tap_run() {

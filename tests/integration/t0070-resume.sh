@@ -1,13 +1,17 @@
 #!/bin/sh
-# Resume: a render killed (SIGKILL, at a fixed frame through RB_TEST_ABORT_AFTER_FRAME) and
-# restarted with --resume completes with output identical to an uninterrupted run; complete
-# frames of the same job are kept, frames rendered by another job (settings, resolution, scene
-# contents, environment map) are rendered again, and the run says so.
+# Resume: a render killed (SIGKILL, at a fixed frame through RB_TEST_ABORT_AFTER_FRAME, and at
+# seeded random moments of the run, mid-frame or mid-write) and restarted with --resume completes
+# with output identical to an uninterrupted run and no temporary file left; complete frames of
+# the same job are kept, frames rendered by another job (settings, resolution, scene contents,
+# environment map) are rendered again, and the run says so.
 . tests/integration/lib.sh
 
 args="--size 160x90 --frames 0-11 -q"
+t0=$(date +%s.%N)
 rb render jobs/demo.yaml --out "$T/whole" $args
+t1=$(date +%s.%N)
 expect_exit 0 "uninterrupted run renders frames 0-11"
+loop_s=$(sed -n 's/.*, \([0-9.]*\) s$/\1/p' "$T/stdout")
 
 RB_TEST_ABORT_AFTER_FRAME=3 "$RB" render jobs/demo.yaml --out "$T/killed" $args 2>/dev/null
 status=$?
@@ -27,6 +31,35 @@ check "the kept frames were not rewritten" \
     test "$(find "$T/killed" -name 'frame.000[0-3].*' -newermt 2001-01-01 | wc -l)" -eq 0
 for f in 0000 0001 0002 0003 0004 0005 0006 0007 0008 0009 0010 0011; do
     check "frame $f identical to the uninterrupted run" cmp -s "$T/whole/frame.$f.exr" "$T/killed/frame.$f.exr"
+done
+
+# SIGKILL at seeded random moments: the uninterrupted run's start-up, then a fraction of its
+# frame loop (its last line's seconds), drawn by an LCG from RB_TEST_SEED so a failure can be
+# replayed; which frame or write the kill lands in varies with the machine, which is the point.
+seed=${RB_TEST_SEED:-1207}
+echo "# random kills: RB_TEST_SEED=$seed"
+for k in 1 2 3 4; do
+    seed=$(((seed * 1103515245 + 12345) % 2147483648))
+    at=$(awk -v s="$seed" -v a="$t0" -v b="$t1" -v l="${loop_s:-0}" \
+        'BEGIN { printf "%.3f", b - a - l + 0.8 * s / 2147483648 * l }')
+    dir="$T/random$k"
+    "$RB" render jobs/demo.yaml --out "$dir" $args >/dev/null 2>&1 &
+    pid=$!
+    sleep "$at"
+    kill -KILL $pid 2>/dev/null
+    wait $pid
+    status=$?
+    exrs=$(ls "$dir" 2>/dev/null | grep -c '^frame\.[0-9]*\.exr$')
+    temps=$(ls -a "$dir" 2>/dev/null | grep -c '\.tmp\.')
+    echo "# kill $k after $at s: status $status, $exrs frame(s) and $temps temporary file(s) left"
+    rb render jobs/demo.yaml --out "$dir" $args --resume
+    expect_exit 0 "kill $k (after $at s): --resume completes the sequence"
+    check "kill $k: no temporary file remains" sh -c "! ls -a '$dir' | grep -q '\.tmp\.'"
+    same=0
+    for f in 0000 0001 0002 0003 0004 0005 0006 0007 0008 0009 0010 0011; do
+        cmp -s "$T/whole/frame.$f.exr" "$dir/frame.$f.exr" && same=$((same + 1))
+    done
+    check "kill $k: all 12 frames identical to the uninterrupted run ($same)" test "$same" -eq 12
 done
 
 # A second --resume finds everything complete and renders nothing.
