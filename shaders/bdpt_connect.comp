@@ -44,6 +44,7 @@ layout(binding = RB_BIND_BDPT_CONNECT_LIGHT + RB_BDPT_DIRECT_DIFFUSE, rgba32f) u
 layout(binding = RB_BIND_BDPT_CONNECT_LIGHT + RB_BDPT_DIRECT_SPECULAR, rgba32f) uniform image2D a_direct_specular;
 layout(binding = RB_BIND_BDPT_CONNECT_LIGHT + RB_BDPT_INDIRECT_DIFFUSE, rgba32f) uniform image2D a_indirect_diffuse;
 layout(binding = RB_BIND_BDPT_CONNECT_LIGHT + RB_BDPT_INDIRECT_SPECULAR, rgba32f) uniform image2D a_indirect_specular;
+layout(std430, binding = RB_BIND_BDPT_CONNECT_EMIT_INFO) readonly buffer EmitInfo { rb_gpu_bdpt_emit_info emit_info; };
 layout(push_constant) uniform Push { rb_gpu_bdpt_connect_push pc; };
 
 #include "shadow.glsl"
@@ -147,7 +148,8 @@ vec3 surface_brdf(vec3 n, vec3 v, vec3 l, rb_material m)
 }
 
 // Radiance VPL k sends from its surface towards p (normal n at p, facing the VPL), times the
-// cosine at p: f_z power G V, G = cos_z cos_p / r^2, clamped at the clamp when one is set.
+// cosine at p: f_z power G V, G = cos_z cos_p / r^2, clamped at the clamp when one is set; an
+// emitter's point sends its emission: power G V.
 vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, out vec3 l, out float r2)
 {
     rb_gpu_vpl z = vpls[k];
@@ -163,6 +165,8 @@ vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, out vec3 l, out flo
     if (vpl_visibility(k, p, ng) <= 0.0)
         return vec3(0.0);
     uint kind = uint(z.from.w);
+    if (kind == RB_BDPT_VPL_EMITTER)
+        return z.power.rgb * geo;
     vec3 to_light =
         kind == RB_KIND_DIRECTIONAL ? z.from.xyz : normalize(z.from.xyz - z.position.xyz);
     rb_material m = rb_material_unpack(z.material.xy);
@@ -201,8 +205,8 @@ vec3 from_lights(vec3 z1, vec3 n, vec3 v, rb_material m, float pdf_bundle)
             vis = shadow_visibility(layer, z1, n, cos_z);
             // VPLs come from shadowed lights only (generate): weigh against them.
             vec4 c = blights[j].choice;
-            float pdf_vpl =
-                rb_bdpt_vpl_density(c.x * c.z, cos_z, kind == RB_KIND_DIRECTIONAL ? 1.0 : dist2);
+            float pdf_vpl = rb_bdpt_vpl_density((1.0 - emit_info.info.x) * c.x * c.z, cos_z,
+                                                kind == RB_KIND_DIRECTIONAL ? 1.0 : dist2);
             if (pc.index.w == RB_BDPT_MIS)
                 w = rb_bdpt_balance(pc.counts.y, pdf_bundle, pc.counts.x, pdf_vpl);
         }
@@ -242,7 +246,8 @@ void main()
     float n_a = pc.counts.x, n_b = pc.counts.y, n_c = pc.counts.z;
     vec3 dd = vec3(0.0), ds = vec3(0.0), id = vec3(0.0), is = vec3(0.0);
 
-    // (a) VPL k -> x1.
+    // (a) VPL k -> x1: light reflected once before x1, or an emitter's point lighting x1
+    // directly (weighed against bundles that find the emitter).
     if (has_vpl && strategies != RB_BDPT_BUNDLE) {
         vec3 l;
         float r2;
@@ -253,7 +258,10 @@ void main()
                 float pdf_bundle = rb_bdpt_bundle_density(-dot(vpls[k].normal.xyz, l), r2);
                 w = rb_bdpt_balance(n_a, vpls[k].normal.w, n_b, pdf_bundle);
             }
-            add(id, is, n1, v1, l, f0, f90, rough, x * (w / n_a));
+            if (uint(vpls[k].from.w) == RB_BDPT_VPL_EMITTER)
+                add(dd, ds, n1, v1, l, f0, f90, rough, x * (w / n_a));
+            else
+                add(id, is, n1, v1, l, f0, f90, rough, x * (w / n_a));
         }
     }
 
@@ -273,9 +281,18 @@ void main()
                 vec3 z1 = x1 + dir * h.t, nz = h.n;
                 if (dot(nz, dir) > 0.0)
                     nz = -nz;
-                if (any(greaterThan(h.m.emission, vec3(0.0))))
-                    add(dd, ds, n1, v1, dir, f0, f90, rough, h.m.emission * (scale / n_b));
                 float cos_in = -dot(nz, dir);
+                if (any(greaterThan(h.m.emission, vec3(0.0))) && strategies != RB_BDPT_VPL) {
+                    // Weighed against the emitters' points (a); alone when it is the only
+                    // strategy or the scene's emitters have no points (zero density).
+                    float w = 1.0;
+                    if (strategies == RB_BDPT_MIS) {
+                        float lum = dot(h.m.emission, vec3(0.2126, 0.7152, 0.0722));
+                        float pdf_bundle = rb_bdpt_bundle_density(abs(cos_in), h.t * h.t);
+                        w = rb_bdpt_balance(n_b, pdf_bundle, n_a, emit_info.info.y * lum);
+                    }
+                    add(dd, ds, n1, v1, dir, f0, f90, rough, h.m.emission * (w * scale / n_b));
+                }
                 if (strategies != RB_BDPT_VPL && cos_in > 0.0) {
                     float pdf_bundle = rb_bdpt_bundle_density(cos_in, h.t * h.t);
                     vec3 x = from_lights(z1, nz, -dir, h.m, pdf_bundle);

@@ -12,6 +12,8 @@
 #include "bdpt_shared.h"
 #include "brdf.glsl"
 #include "lights.glsl"
+#include "material.glsl"
+#include "view.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -30,7 +32,40 @@ layout(binding = RB_BIND_BDPT_GENERATE_RSM_MATERIAL, rg32ui) uniform readonly ui
 layout(std430, binding = RB_BIND_BDPT_GENERATE_VPLS) writeonly buffer Vpls { rb_gpu_vpl vpls[]; };
 layout(std430, binding = RB_BIND_BDPT_GENERATE_VPL_VIEWS) writeonly buffer VplViews { rb_gpu_view vpl_views[]; };
 layout(std430, binding = RB_BIND_BDPT_GENERATE_BUNDLE_VIEWS) writeonly buffer BundleViews { rb_gpu_view bundle_views[]; };
+layout(std430, binding = RB_BIND_BDPT_GENERATE_VERTICES) readonly buffer Vertices { rb_gpu_vertex vertices[]; };
+layout(std430, binding = RB_BIND_BDPT_GENERATE_EMITTERS) readonly buffer Emitters { rb_gpu_bdpt_emitter emitters[]; };
+layout(std430, binding = RB_BIND_BDPT_GENERATE_MATERIALS) readonly buffer Materials { rb_gpu_material materials[]; };
+layout(binding = RB_BIND_BDPT_GENERATE_SRGB_TEXTURES) uniform sampler2DArray srgb_textures;
+layout(binding = RB_BIND_BDPT_GENERATE_LINEAR_TEXTURES) uniform sampler2DArray linear_textures;
+layout(std430, binding = RB_BIND_BDPT_GENERATE_EMIT_INFO) writeonly buffer EmitInfo { rb_gpu_bdpt_emit_info emit_info; };
 layout(push_constant) uniform Push { rb_gpu_bdpt_generate_push pc; };
+
+float luminance(vec3 c)
+{
+    return dot(max(c, vec3(0.0)), vec3(0.2126, 0.7152, 0.0722));
+}
+
+// Emissive triangle e's area times the luminance of its emissive factor: its share of the
+// emitters' power (as the reference weighs them).
+float emitter_weight(uint e, out vec3 p0, out vec3 p1, out vec3 p2)
+{
+    uvec4 t = emitters[e].tri;
+    p0 = vertices[t.x].position.xyz;
+    p1 = vertices[t.y].position.xyz;
+    p2 = vertices[t.z].position.xyz;
+    float area = 0.5 * length(cross(p1 - p0, p2 - p0));
+    return area * luminance(materials[t.w].emissive.rgb);
+}
+
+// S: the sum of emitter_weight, in one fixed order, so every invocation gets the same bits.
+float emitter_sum()
+{
+    float sum = 0.0;
+    vec3 p0, p1, p2;
+    for (uint e = 0u; e < uint(pc.sizes.w); e++)
+        sum += emitter_weight(e, p0, p1, p2);
+    return sum;
+}
 
 float unordered(uint u)
 {
@@ -97,9 +132,51 @@ void bundle(uint i)
     bundle_views[i] = v;
 }
 
-void vpl(uint i)
+// VPL i as a point y0 on an emitter (u.x rescaled to [0, 1) by the caller): the triangle by
+// its weight, then uniformly by area, and a side by the remainder of u.x; it sends its
+// emission Le over that side's hemisphere. Its power is Le / p_A(y0), p_A(y0) = P_e w_t / S /
+// area_t / 2 = P_e lum_t / (2 S); its density for MIS takes lum_t from the emission as the
+// bundles' nodes store it, so that the two strategies' weights are computed from one value.
+rb_gpu_vpl emitter_vpl(vec3 u, float p_e, float sum)
 {
-    vec3 u = samples[i].u.xyz;
+    rb_gpu_vpl o;
+    o.position = vec4(0.0);
+    o.normal = vec4(0.0, 0.0, 1.0, 0.0);
+    o.power = vec4(0.0);
+    o.from = vec4(0.0, 0.0, 0.0, float(RB_BDPT_VPL_EMITTER));
+    o.material = uvec4(0u, 0u, 0xffffffffu, 0u);
+    float target = u.x * sum, cum = 0.0;
+    uint e = 0u, count = uint(pc.sizes.w);
+    vec3 p0, p1, p2;
+    float w = emitter_weight(0u, p0, p1, p2);
+    while (e + 1u < count && !(w > 0.0 && target < cum + w)) {
+        cum += w;
+        e++;
+        w = emitter_weight(e, p0, p1, p2);
+    }
+    if (!(w > 0.0))
+        return o;
+    float rest = clamp((target - cum) / w, 0.0, 1.0);
+    float su = sqrt(u.y), b1 = su * (1.0 - u.z), b2 = su * u.z, b0 = 1.0 - b1 - b2;
+    uvec4 t = emitters[e].tri;
+    vec3 n = normalize(cross(p1 - p0, p2 - p0)) * (rest < 0.5 ? 1.0 : -1.0);
+    vec2 uv = b0 * vertices[t.x].uv.xy + b1 * vertices[t.y].uv.xy + b2 * vertices[t.z].uv.xy;
+    rb_surface m = rb_material_eval(materials[t.w], uv, srgb_textures, linear_textures);
+    float lum = luminance(materials[t.w].emissive.rgb);
+    float pdf = p_e * lum / (2.0 * sum);
+    if (!(pdf > 0.0))
+        return o;
+    rb_material q = rb_material_unpack(rb_material_pack(vec3(0.0), vec3(0.0), 1.0, m.emission));
+    o.position = vec4(b0 * p0 + b1 * p1 + b2 * p2, 1.0);
+    o.normal = vec4(n, p_e * luminance(q.emission) / (2.0 * sum));
+    o.power = vec4(m.emission / pdf, 0.0);
+    return o;
+}
+
+// VPL i of a punctual light (u.x rescaled to [0, 1) by the caller): the light by power, a
+// direction from it, and the surface its RSM sees there, reflecting what it receives.
+rb_gpu_vpl light_vpl(vec3 u, float p_e)
+{
     uint count = pc.counts.z, j = 0u;
     while (j + 1u < count && u.x >= blights[j].choice.y)
         j++;
@@ -155,13 +232,31 @@ void vpl(uint i)
         float cos_in = dot(n, to_light);
         if (cos_in > 0.0) {
             // B.choice.z: the density of the direction (point, spot) or of the beam point.
-            float pdf = B.choice.x * B.choice.z;
+            float pdf = (1.0 - p_e) * B.choice.x * B.choice.z;
             o.position = vec4(p.xyz, 1.0);
             o.normal = vec4(n, rb_bdpt_vpl_density(pdf, cos_in, dist2)); // dist2 = 1: directional
             o.power = vec4(intensity / pdf, 0.0);
             o.material.xy = imageLoad(rsm_material, ivec3(texel, int(layer))).xy;
         }
     }
+    return o;
+}
+
+// The chance P_e that a VPL is a point on an emitter rather than a punctual light's: the
+// emitters' power (pi Le A on each of two sides) over all (BDPT.md, emitters); sum: S.
+float emitter_chance(out float sum)
+{
+    sum = pc.sizes.w > 0.0 ? emitter_sum() : 0.0;
+    float flux = 2.0 * RB_PI * sum, total = flux + pc.sizes.z;
+    return total > 0.0 ? flux / total : 0.0;
+}
+
+void vpl(uint i)
+{
+    vec3 u = samples[i].u.xyz;
+    float sum, p_e = emitter_chance(sum);
+    rb_gpu_vpl o = u.x < p_e ? emitter_vpl(vec3(u.x / p_e, u.yz), p_e, sum)
+                             : light_vpl(vec3(min((u.x - p_e) / (1.0 - p_e), 1.0), u.yz), p_e);
     vpls[i] = o;
     // The VPL's hemisphere, its eye a hair above the surface so the surface itself is behind.
     float far = 2.1 * pc.scene.w;
@@ -172,6 +267,10 @@ void vpl(uint i)
 void main()
 {
     uint i = gl_GlobalInvocationID.x;
+    if (i == 0u) {
+        float sum, p_e = emitter_chance(sum);
+        emit_info.info = vec4(p_e, sum > 0.0 ? p_e / (2.0 * sum) : 0.0, 0.0, 0.0);
+    }
     if (i < pc.counts.x)
         vpl(i);
     if (i < pc.counts.y)

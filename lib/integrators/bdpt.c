@@ -1,10 +1,13 @@
 /* The bdpt integrator (seed 000; DESIGN.md "bdpt", BDPT.md): direct's frame, then
  *   rsm -> bounds -> generate -> vpl -> split -> (bundle k -> connect k) for each k -> gather
  *   -> filter -> output.
- * Reflective shadow maps of the shadowed punctual lights give the VPLs' surfaces; each VPL gets
- * a paraboloid shadow map; each global ray-bundle is an orthographic view into per-pixel linked
- * lists, connected to the sub-image of the interleaved G-buffer it lights before the next one
- * reuses the list. Its history is direct's: one frame, for motion vectors. */
+ * Reflective shadow maps of the shadowed punctual lights give the VPLs' surfaces; the emissive
+ * triangles give VPLs too, points on them picked by power, which light the camera's points
+ * directly (weighed against the bundles that find the emitter) and, through a bundle, one
+ * bounce further; each VPL gets a paraboloid shadow map; each global ray-bundle is an
+ * orthographic view into per-pixel linked lists, connected to the sub-image of the interleaved
+ * G-buffer it lights before the next one reuses the list. Its history is direct's: one frame,
+ * for motion vectors. */
 #include "integrators/integrators_int.h"
 
 #include <math.h>
@@ -32,8 +35,9 @@ static uint32_t history_frames(const struct rb_job *job)
 static void release(struct rb_gpu *gpu, struct bdpt *d)
 {
     struct rb_bdpt_frame *b = &d->b;
-    struct rb_gpu_buffer *buffers[] = {&b->bounds,    &b->samples,      &b->lights, &b->vpls,
-                                       &b->vpl_views, &b->bundle_views, &d->usage};
+    struct rb_gpu_buffer *buffers[] = {&b->bounds,   &b->samples,   &b->lights,
+                                       &b->vpls,     &b->vpl_views, &b->bundle_views,
+                                       &b->emitters, &b->emit_info, &d->usage};
     for (size_t i = 0; i < COUNT(buffers); i++)
         rb_gpu_buffer_release(gpu, buffers[i]);
     for (int i = 0; i < RB_VIEW_RSM_TARGETS; i++)
@@ -123,6 +127,46 @@ static enum rb_status upload_samples(struct rb_gpu *gpu, struct rb_bdpt_frame *b
     return st;
 }
 
+/* The emissive triangles (a material whose emissive factor is above zero), as corners in the
+ * frame's world vertex buffer, which holds each instance's vertices in instance order. Their
+ * points are VPLs too: generate picks them by power each frame from where the animate pass put
+ * them. */
+static enum rb_status upload_emitters(struct rb_integrator *it, struct rb_bdpt_frame *b,
+                                      struct rb_err *err)
+{
+    const struct rb_scene *scene = it->scene;
+    const struct rb_scene_pose *pose = it->cur.pose;
+    uint32_t count = 0, cap = 0, dst = 0;
+    struct rb_gpu_bdpt_emitter *list = NULL;
+    for (uint32_t i = 0; i < pose->instance_count; i++) {
+        const struct rb_scene_primitive *p = &scene->primitives[pose->instances[i].primitive];
+        const float *e = scene->materials[p->material].emissive;
+        if (e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f)
+            for (uint32_t j = 0; j + 2 < p->index_count; j += 3) {
+                if (count == cap) {
+                    cap = cap ? 2 * cap : 64;
+                    void *grown = realloc(list, cap * sizeof(*list));
+                    if (!grown) {
+                        free(list);
+                        return rb_errf(err, RB_E_NOMEM, "out of memory for emissive triangles");
+                    }
+                    list = grown;
+                }
+                const uint32_t *t = &scene->indices[p->first_index + j];
+                list[count++] = (struct rb_gpu_bdpt_emitter){
+                    .tri = {dst + t[0], dst + t[1], dst + t[2], p->material}};
+            }
+        dst += p->vertex_count;
+    }
+    b->emitter_count = count;
+    enum rb_status st = buffer(it->gpu, (VkDeviceSize)(count ? count : 1) * sizeof(*list), false,
+                               "bdpt.emitters", &b->emitters, err);
+    if (st == RB_OK && count)
+        st = rb_gpu_buffer_upload(it->gpu, &b->emitters, list, count * sizeof(*list), err);
+    free(list);
+    return st;
+}
+
 static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, struct rb_err *err)
 {
     struct rb_gpu *gpu = it->gpu;
@@ -142,7 +186,9 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
                      &b->bundle_views, err)) ||
         (st = buffer(gpu, kb * sizeof(struct rb_gpu_list_counter), true, "bdpt.usage", &d->usage,
                      err)) ||
-        (st = upload_samples(gpu, b, err)))
+        (st = buffer(gpu, sizeof(struct rb_gpu_bdpt_emit_info), false, "bdpt.emit_info",
+                     &b->emit_info, err)) ||
+        (st = upload_emitters(it, b, err)) || (st = upload_samples(gpu, b, err)))
         return st;
 
     const VkImageUsageFlags target =
@@ -276,9 +322,10 @@ static float luminance(const float c[3])
     return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
 }
 
-/* Each light's chance of a VPL, by emitted power (BDPT.md "VPL"), and its sampling densities:
- * a point light's sphere, a spot light's cone, a directional light's beam across its shadow
- * map's square. Lights without a shadow map get no VPLs (the bundles' side lights them). */
+/* Each light's chance of a VPL among the punctual lights, by emitted power (BDPT.md "VPL"),
+ * and its sampling densities: a point light's sphere, a spot light's cone, a directional
+ * light's beam across its shadow map's square. Lights without a shadow map get no VPLs (the
+ * bundles' side lights them). Generate weighs the sum, set in b, against the emitters'. */
 static void write_lights(const struct rb_integrator *it, struct rb_bdpt_frame *b,
                          const struct rb_moment *m)
 {
@@ -301,6 +348,7 @@ static void write_lights(const struct rb_integrator *it, struct rb_bdpt_frame *b
         total += power[i];
         out[i] = (struct rb_gpu_bdpt_light){.choice = {0.0f, 0.0f, density, cos_outer}};
     }
+    b->punctual_power = (float)total;
     double cdf = 0.0;
     for (uint32_t i = 0; i < m->light_count && total > 0.0; i++) {
         cdf += power[i];
@@ -403,7 +451,7 @@ static void record_connect(struct rb_integrator *it, struct bdpt *d, VkCommandBu
 {
     struct rb_frame *frame = &it->frame;
     struct rb_bdpt_frame *b = &d->b;
-    struct rb_gpu_access uses[16 + RB_BDPT_SPLIT_COUNT + RB_BDPT_LIGHT_COUNT] = {
+    struct rb_gpu_access uses[13 + RB_BDPT_SPLIT_COUNT + RB_BDPT_LIGHT_COUNT] = {
         {.buffer = &frame->globals, .use = RB_GPU_COMPUTE_UNIFORM},
         {.buffer = &b->vpls, .use = RB_GPU_COMPUTE_READ},
         {.buffer = &b->vpl_views, .use = RB_GPU_COMPUTE_READ},
@@ -416,8 +464,9 @@ static void record_connect(struct rb_integrator *it, struct bdpt *d, VkCommandBu
         {.buffer = &frame->shadow_views, .use = RB_GPU_COMPUTE_READ},
         {.image = &frame->shadow_maps, .use = RB_GPU_COMPUTE_SAMPLED},
         {.image = &frame->env_map, .use = RB_GPU_COMPUTE_SAMPLED},
+        {.buffer = &b->emit_info, .use = RB_GPU_COMPUTE_READ},
     };
-    uint32_t count = 12;
+    uint32_t count = 13;
     for (int i = 0; i < RB_BDPT_SPLIT_COUNT; i++)
         uses[count++] = (struct rb_gpu_access){.image = &b->split[i], .use = RB_GPU_COMPUTE_READ};
     for (int i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
@@ -460,9 +509,15 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
         {.buffer = &b->vpls, .use = RB_GPU_COMPUTE_WRITE},
         {.buffer = &b->vpl_views, .use = RB_GPU_COMPUTE_WRITE},
         {.buffer = &b->bundle_views, .use = RB_GPU_COMPUTE_WRITE},
+        {.buffer = &ctx->cur->vertices, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &b->emitters, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &frame->materials, .use = RB_GPU_COMPUTE_READ},
+        {.image = &frame->srgb_textures, .use = RB_GPU_COMPUTE_SAMPLED},
+        {.image = &frame->linear_textures, .use = RB_GPU_COMPUTE_SAMPLED},
+        {.buffer = &b->emit_info, .use = RB_GPU_COMPUTE_WRITE},
     };
     rb_integrator_pass_begin(it, cmd, "generate", generate, COUNT(generate));
-    rb_pass_bdpt_generate_record(d->passes, cmd, frame, b);
+    rb_pass_bdpt_generate_record(d->passes, cmd, frame, ctx->cur, b);
     rb_integrator_pass_end(it, cmd);
 
     if (b->vpl_count) {

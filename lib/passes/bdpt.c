@@ -35,6 +35,12 @@ static const struct rb_pass_binding generate_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_VPLS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_VPL_VIEWS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_BUNDLE_VIEWS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_GENERATE_VERTICES, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_GENERATE_EMITTERS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_GENERATE_MATERIALS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_GENERATE_SRGB_TEXTURES, COMBINED_IMAGE_SAMPLER),
+    RB_PASS_BIND(RB_BIND_BDPT_GENERATE_LINEAR_TEXTURES, COMBINED_IMAGE_SAMPLER),
+    RB_PASS_BIND(RB_BIND_BDPT_GENERATE_EMIT_INFO, STORAGE_BUFFER),
 };
 _Static_assert(COUNT(generate_bindings) == RB_BIND_BDPT_GENERATE_COUNT, "generate bindings");
 
@@ -76,6 +82,7 @@ static const struct rb_pass_binding connect_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_CONNECT_LIGHT + 1, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_CONNECT_LIGHT + 2, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_CONNECT_LIGHT + 3, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_CONNECT_EMIT_INFO, STORAGE_BUFFER),
 };
 _Static_assert(COUNT(connect_bindings) == RB_BIND_BDPT_CONNECT_COUNT, "connect bindings");
 
@@ -191,7 +198,8 @@ void rb_pass_bdpt_bounds_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
 }
 
 void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
-                                  const struct rb_frame *frame, const struct rb_bdpt_frame *b)
+                                  const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                                  const struct rb_bdpt_frame *b)
 {
     struct rb_pass_bindings bind = {.pass = &p->generate};
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_BOUNDS, &b->bounds);
@@ -205,11 +213,20 @@ void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_VPLS, &b->vpls);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_VPL_VIEWS, &b->vpl_views);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_BUNDLE_VIEWS, &b->bundle_views);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_VERTICES, &slot->vertices);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_EMITTERS, &b->emitters);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_MATERIALS, &frame->materials);
+    rb_pass_bind_image(&bind, RB_BIND_BDPT_GENERATE_SRGB_TEXTURES, frame->srgb_textures.view,
+                       p->generate.gpu->linear_sampler);
+    rb_pass_bind_image(&bind, RB_BIND_BDPT_GENERATE_LINEAR_TEXTURES, frame->linear_textures.view,
+                       p->generate.gpu->linear_sampler);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_EMIT_INFO, &b->emit_info);
     rb_pass_record_bindings(cmd, &bind);
     struct rb_gpu_bdpt_generate_push pc = {
         .counts = {b->vpl_count, b->bundle_count, frame->light_count, b->rsm[0].width_px},
         .scene = {b->scene_centre[0], b->scene_centre[1], b->scene_centre[2], b->scene_radius},
-        .sizes = {(float)b->bundle_size_px, (float)b->vpl_size_px, 0.0f, 0.0f},
+        .sizes = {(float)b->bundle_size_px, (float)b->vpl_size_px, b->punctual_power,
+                  (float)b->emitter_count},
     };
     push(cmd, &p->generate, &pc, sizeof(pc));
     uint32_t n = b->vpl_count > b->bundle_count ? b->vpl_count : b->bundle_count;
@@ -270,6 +287,7 @@ void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     rb_pass_bind_image(&bind, RB_BIND_BDPT_CONNECT_ENV_MAP, frame->env_map.view, gpu->env_sampler);
     for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
         rb_pass_bind_image(&bind, RB_BIND_BDPT_CONNECT_LIGHT + i, b->accum[i].view, VK_NULL_HANDLE);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_CONNECT_EMIT_INFO, &b->emit_info);
     rb_pass_record_bindings(cmd, &bind);
     uint32_t n = b->interleave, count = n * n, s = k % count;
     uint32_t pairs = b->vpl_count < b->bundle_count ? b->vpl_count : b->bundle_count;

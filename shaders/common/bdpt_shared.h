@@ -21,6 +21,25 @@ struct rb_gpu_vpl {
                          * z: the light's index; w: unused */
 };
 
+/* A VPL's from.w when it is a point on an emissive triangle (BDPT.md "As implemented",
+ * emitters): it sends its emission, not a reflection, and its map covers the side it emits
+ * from. */
+#define RB_BDPT_VPL_EMITTER 4
+
+/* One emissive triangle, listed once when the integrator starts (a triangle of the scene whose
+ * material's emissive factor is above zero). */
+struct rb_gpu_bdpt_emitter {
+    RB_UVEC4(tri); /* xyz: its corners' indices into the frame's world vertices; w: material */
+};
+
+/* What the frame's emitters come to, written by bdpt_generate.comp for bdpt_connect.comp. */
+struct rb_gpu_bdpt_emit_info {
+    RB_VEC4(info); /* x: P_e, the chance a VPL is a point on an emitter rather than a VPL of a
+                    * punctual light; y: P_e / (2 S), S the sum of area x luminance of the
+                    * emissive factor over the emitters: an emitter point's area density per
+                    * unit of that luminance (both sides); z, w: unused */
+};
+
 /* Per light, what sampling it needs beyond struct rb_gpu_light (host-written each frame). */
 struct rb_gpu_bdpt_light {
     RB_VEC4(choice); /* x: P(light), the chance a VPL picks it (by power); y: the CDF through it;
@@ -40,7 +59,8 @@ struct rb_gpu_bdpt_sample {
 struct rb_gpu_bdpt_generate_push {
     RB_UVEC4(counts);  /* VPLs, bundles, light count, RSM size in texels */
     RB_VEC4(scene);    /* xyz: the centre of the job's bounds; w: their radius */
-    RB_VEC4(sizes);    /* bundle grid size, VPL map size, unused, unused */
+    RB_VEC4(sizes);    /* bundle grid size, VPL map size, the punctual lights' summed power
+                        * (W, as write_lights weighs them), the emissive triangles' count */
 };
 
 /* Push constants of bdpt_connect.comp: one iteration of the loop, over one sub-image. */

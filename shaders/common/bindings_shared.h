@@ -69,7 +69,13 @@
 #define RB_BIND_BDPT_GENERATE_VPLS 8         /* written */
 #define RB_BIND_BDPT_GENERATE_VPL_VIEWS 9    /* written */
 #define RB_BIND_BDPT_GENERATE_BUNDLE_VIEWS 10 /* written */
-#define RB_BIND_BDPT_GENERATE_COUNT 11
+#define RB_BIND_BDPT_GENERATE_VERTICES 11     /* the frame's world vertices */
+#define RB_BIND_BDPT_GENERATE_EMITTERS 12     /* rb_gpu_bdpt_emitter */
+#define RB_BIND_BDPT_GENERATE_MATERIALS 13
+#define RB_BIND_BDPT_GENERATE_SRGB_TEXTURES 14
+#define RB_BIND_BDPT_GENERATE_LINEAR_TEXTURES 15
+#define RB_BIND_BDPT_GENERATE_EMIT_INFO 16 /* written: rb_gpu_bdpt_emit_info */
+#define RB_BIND_BDPT_GENERATE_COUNT 17
 
 /* bdpt_split.comp: the G-buffer into n x n sub-images */
 #define RB_BIND_BDPT_SPLIT_GB_POSITION 0
@@ -96,7 +102,8 @@
 #define RB_BIND_BDPT_CONNECT_SHADOW_MAPS 14
 #define RB_BIND_BDPT_CONNECT_ENV_MAP 15
 #define RB_BIND_BDPT_CONNECT_LIGHT 16 /* read and written: RB_BDPT_LIGHT_COUNT images */
-#define RB_BIND_BDPT_CONNECT_COUNT 20
+#define RB_BIND_BDPT_CONNECT_EMIT_INFO 20 /* rb_gpu_bdpt_emit_info */
+#define RB_BIND_BDPT_CONNECT_COUNT 21
 
 /* bdpt_gather.comp: the sub-images' light back to the image */
 #define RB_BIND_BDPT_GATHER_IN 0  /* RB_BDPT_LIGHT_COUNT images */
