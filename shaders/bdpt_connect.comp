@@ -48,16 +48,7 @@ layout(std430, binding = RB_BIND_BDPT_CONNECT_EMIT_INFO) readonly buffer EmitInf
 layout(push_constant) uniform Push { rb_gpu_bdpt_connect_push pc; };
 
 #include "shadow.glsl"
-
-const uint NONE = 0xffffffffu;
-
-// The surface a bundle ray meets.
-struct hit {
-    bool found;
-    float t;        // distance from x1
-    vec3 n;         // shading normal, facing x1
-    rb_material m;
-};
+#include "bundle_search.glsl"
 
 // Whether VPL k sees p (geometric normal ng) through its paraboloid map: p is lifted off its
 // surface by a texel's footprint along ng (at most 4 / size radians at the distance) and its
@@ -79,58 +70,6 @@ float vpl_visibility(uint k, vec3 p, vec3 ng)
     ivec2 t = clamp(ivec2(floor((ndc * 0.5 + 0.5) * size)), ivec2(0), ivec2(int(size) - 1));
     float stored = texelFetch(vpl_maps, ivec3(t, int(k)), 0).r;
     return dist * (1.0 - pc.params.x) <= stored ? 1.0 : 0.0;
-}
-
-// Whether node a comes before node b in the search's total order: nearer first, then by the
-// node's words, so that the order the nodes were appended in (which varies from run to run)
-// never changes the pick.
-bool before(rb_gpu_list_node a, rb_gpu_list_node b)
-{
-    if (a.depth != b.depth)
-        return a.depth < b.depth;
-    if (a.normal != b.normal)
-        return a.normal < b.normal;
-    if (a.albedo != b.albedo)
-        return a.albedo < b.albedo;
-    return a.gloss < b.gloss;
-}
-
-// Program 1 of seed 000: the nearest surface facing x1 along the bundle from x1, in either
-// direction. A node's depth carries its face in its sign (+ front: facing against the bundle's
-// direction d). Going along s d (s = +-1) from view depth z1, the surfaces that face x1 are the
-// nodes whose depth has the sign s, and they lie ahead where depth > s z1: the nearest is the
-// least such depth. x1's own surface faces the other way and is never picked.
-hit bundle_search(uint k, vec3 x1, float s)
-{
-    hit h;
-    h.found = false;
-    rb_gpu_view v = bundle_views[k];
-    int size = int(pc.params.z);
-    vec2 ndc = (v.transform * vec4(x1, 1.0)).xy;
-    ivec2 t = ivec2(floor((ndc * 0.5 + 0.5) * float(size)));
-    if (any(lessThan(t, ivec2(0))) || any(greaterThanEqual(t, ivec2(size))))
-        return h; // outside the fitted grid: cannot happen for a visible x1 (generate)
-    float key = s * rb_view_depth(v, RB_VIEW_ORTHOGRAPHIC, x1);
-    float eps = 0.5 * v.axis.w; // half a texel: the nodes' depths are taken at texel centres
-    uint i = imageLoad(heads, ivec3(t, 0)).r;
-    uint best = NONE;
-    rb_gpu_list_node b;
-    uint capacity = uint(pc.params.w);
-    for (uint step = 0u; i != NONE && i < capacity && step < capacity; step++) {
-        rb_gpu_list_node n = nodes[i];
-        if (n.depth * s > 0.0 && n.depth > key + eps && (best == NONE || before(n, b))) {
-            best = i;
-            b = n;
-        }
-        i = n.next;
-    }
-    if (best == NONE)
-        return h;
-    h.found = true;
-    h.t = b.depth - key;
-    h.n = rb_view_polar_decode(b.normal);
-    h.m = rb_material_unpack(uvec2(b.albedo, b.gloss));
-    return h;
 }
 
 vec3 environment(vec3 dir)
@@ -273,7 +212,8 @@ void main()
         vec3 dir = s * d;
         float cos1 = dot(n1, dir);
         if (cos1 > 0.0) {
-            hit h = bundle_search(k, x1, s);
+            rb_bundle_hit h =
+                rb_bundle_search(bundle_views[k], int(pc.params.z), uint(pc.params.w), x1, s);
             float scale = cos1 * 2.0 * RB_PI;
             if (!h.found) {
                 add(dd, ds, n1, v1, dir, f0, f90, rough, environment(dir) * (scale / n_b));

@@ -631,3 +631,9 @@ const struct rb_integrator_ops rb_integrator_bdpt = {
     .collect = collect,
     .destroy = destroy,
 };
+
+const struct rb_bdpt_frame *rb_integrator_bdpt_frame(const struct rb_integrator *it)
+{
+    const struct bdpt *d = it->ops == &rb_integrator_bdpt ? it->state : NULL;
+    return d ? &d->b : NULL;
+}

@@ -129,4 +129,11 @@ bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkComman
 void rb_base_record_output(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
                            const struct rb_gpu_image *light);
 
+/* ---- bdpt.c ------------------------------------------------------------------------------ */
+
+/* The bdpt integrator's own frame resources as its last frame left them (its bundle views; the
+ * lists of its last bundle, bundle_count - 1), for tests that look into them; NULL for another
+ * integrator. Valid until rb_integrator_destroy. */
+const struct rb_bdpt_frame *rb_integrator_bdpt_frame(const struct rb_integrator *it);
+
 #endif

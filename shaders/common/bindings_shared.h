@@ -122,6 +122,15 @@
 #define RB_BIND_BRDF_TABLE_OUT 1
 #define RB_BIND_BRDF_TABLE_COUNT 2
 
+/* bundle_probe.comp (tests/unit/test_bundle_search.c) */
+#define RB_BIND_BUNDLE_PROBE_POSITION 0 /* the G-buffer's position */
+#define RB_BIND_BUNDLE_PROBE_MOTION 1   /* the G-buffer's motion: zw, the octahedral Ng */
+#define RB_BIND_BUNDLE_PROBE_VIEWS 2
+#define RB_BIND_BUNDLE_PROBE_HEADS 3
+#define RB_BIND_BUNDLE_PROBE_NODES 4
+#define RB_BIND_BUNDLE_PROBE_OUT 5
+#define RB_BIND_BUNDLE_PROBE_COUNT 6
+
 /* light_table.comp (tests/unit/test_light_parity.c) */
 #define RB_BIND_LIGHT_TABLE_LIGHTS 0
 #define RB_BIND_LIGHT_TABLE_POINTS 1
