@@ -172,6 +172,10 @@ struct rb_io_timing_file {
  * JSON path, e.g. 'passes[2].gpu_ms'). */
 enum rb_status rb_io_timing_read(const char *path, struct rb_io_timing_file *out,
                                  struct rb_err *err);
+/* Parses a sidecar's text (size bytes, not necessarily NUL-terminated) as rb_io_timing_read
+ * does; name stands for the file in messages. */
+enum rb_status rb_io_timing_parse(const char *name, const char *text, size_t size,
+                                  struct rb_io_timing_file *out, struct rb_err *err);
 void rb_io_timing_file_release(struct rb_io_timing_file *t);
 
 /* bench.json, what raybundle bench records beside its runs' sidecars (run-01/, run-02/, ...). */
@@ -195,6 +199,9 @@ enum rb_status rb_io_bench_write(const char *path, const struct rb_io_bench *b, 
 /* Reads bench.json into *out (released with rb_io_bench_release, also after a failure); fails
  * as rb_io_timing_read does. */
 enum rb_status rb_io_bench_read(const char *path, struct rb_io_bench *out, struct rb_err *err);
+/* Parses bench.json's text as rb_io_bench_read does; name stands for the file in messages. */
+enum rb_status rb_io_bench_parse(const char *name, const char *text, size_t size,
+                                 struct rb_io_bench *out, struct rb_err *err);
 void rb_io_bench_release(struct rb_io_bench *b);
 
 #endif
