@@ -140,14 +140,14 @@ $(BUILD)/tests/fuzz/%: tests/fuzz/%.c tests/fuzz/replay.c $(BUILD)/libraybundle.
 		$(BUILD)/libraybundle.a $(PKG_LIBS) -lstdc++
 
 # The same replays under ASan and UBSan (gcc or clang), also in make check: any report aborts the
-# replay and fails t0090. Only what the targets call (core, job, scene) is compiled again, into
-# $(BUILD)/asan at -O1 (fast to compile, still quick to run), so the main build is untouched and
-# the extra time stays small.
+# replay and fails t0090. Only what the targets call (core, job, scene, io/timing.c's JSON
+# readers) is compiled again, into $(BUILD)/asan at -O1 (fast to compile, still quick to run), so
+# the main build is untouched and the extra time stays small.
 FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -O1
-FUZZ_SAN_SRC := $(filter lib/core/% lib/job/% lib/scene/%,$(LIB_C) $(LIB_CXX))
+FUZZ_SAN_SRC := $(filter lib/core/% lib/job/% lib/scene/% lib/io/timing.c,$(LIB_C) $(LIB_CXX))
 FUZZ_SAN_OBJ := $(patsubst %,$(BUILD)/asan/%.o,$(basename $(FUZZ_SAN_SRC)))
 FUZZ_SAN_BIN := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/asan/tests/fuzz/%)
-FUZZ_SAN_LIBS = $(shell $(PKG_CONFIG) --libs yaml-0.1 tinygltf libxxhash 2>/dev/null) \
+FUZZ_SAN_LIBS = $(shell $(PKG_CONFIG) --libs yaml-0.1 tinygltf libxxhash jansson 2>/dev/null) \
 	-lmeshoptimizer -lm
 FUZZ_SAN_DEPS := $(FUZZ_SAN_OBJ:.o=.d) $(FUZZ_SAN_BIN:=.d) $(BUILD)/asan/tests/fuzz/replay.d
 
@@ -217,6 +217,7 @@ install: $(BUILD)/raybundle
 uninstall:
 	rm -f "$(DESTDIR)$(BINDIR)/raybundle" "$(DESTDIR)$(MANDIR)/man1/raybundle.1" \
 		"$(DESTDIR)$(MANDIR)/man1/raybundle-bench.1" \
+		"$(DESTDIR)$(MANDIR)/man1/raybundle-report.1" \
 		"$(DESTDIR)$(MANDIR)/man5/raybundle-job.5" "$(DESTDIR)$(DATADIR)/ocio/config.ocio"
 
 lint:

@@ -1,6 +1,7 @@
 #!/bin/sh
 # Installs the Debian 12 packages raybundle needs to build, render and test, and nothing from
 # anywhere else. Fast when everything is present; the one list of packages is here.
+# chromium is for the tests alone: t0420 loads raybundle report's page in it, headless.
 # --farm: also the single-node Slurm cluster `make check-farm` starts (slurm-wlm, munge).
 set -eu
 
@@ -15,6 +16,7 @@ libembree-dev libmeshoptimizer-dev
 libyaml-dev libxxhash-dev libjansson-dev
 libcmocka-dev
 mandoc man-db time clang-format
+chromium
 "
 if [ "${1:-}" = --farm ]; then
     PACKAGES="$PACKAGES slurm-wlm munge"

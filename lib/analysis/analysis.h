@@ -1,8 +1,8 @@
 /* Image analysis: error metrics between a test image and a reference (RMSE, relative MSE, MAE,
  * PSNR, the largest error and where it is), masks that choose the pixels compared, and their
  * accumulation over a frame sequence; timing regression between two bench sets (the
- * Mann-Whitney U test per pass). Knows nothing of the command line; raybundle compare
- * (cmd/compare.c) and raybundle timing (cmd/timing.c) load the files and print. */
+ * Mann-Whitney U test per pass); the HTML report of a rendered sequence. Knows nothing of the
+ * command line; raybundle compare, timing and report (cmd/) load the files and print. */
 #ifndef RB_ANALYSIS_ANALYSIS_H
 #define RB_ANALYSIS_ANALYSIS_H
 
@@ -246,5 +246,111 @@ enum rb_status rb_analysis_timing_compare_sets(const struct rb_analysis_timing_s
                                                const struct rb_analysis_timing_desc *desc,
                                                struct rb_analysis_timing_row **rows,
                                                size_t *row_count, struct rb_err *err);
+
+/* ---- report (report.c) ------------------------------------------------------------------ */
+
+/* A frame sequence in a directory, as raybundle render and reference write one: STEM.NNNN.exr,
+ * each beside its STEM.NNNN.timing.json and, where the integrator keeps hit ratios, its
+ * STEM.NNNN.hits.exr. */
+struct rb_analysis_sequence {
+    char dir[1024];
+    char stem[256]; /* the file names before the frame number: "frame" */
+    int *frames;    /* frame_count frame numbers, ascending */
+    char **paths;   /* each frame's EXR, "dir/STEM.NNNN.exr" */
+    size_t frame_count;
+};
+
+/* Finds the frames in dir: the files named STEM.DIGITS.exr (so not STEM.DIGITS.hits.exr).
+ * Fails with RB_E_IO when dir cannot be read, RB_E_INVALID when it holds no frame, frames of two
+ * stems (both named) or a frame twice (frame.1.exr and frame.0001.exr), RB_E_NOMEM. Release
+ * *out with rb_analysis_sequence_release, also after a failure. */
+enum rb_status rb_analysis_sequence_scan(const char *dir, struct rb_analysis_sequence *out,
+                                         struct rb_err *err);
+void rb_analysis_sequence_release(struct rb_analysis_sequence *s);
+
+/* The report page's fixed layout, in CSS pixels (raybundle-report(1)): the header, then one
+ * section a chart, each a title and an SVG whose plot area is at (PLOT_X, PLOT_Y) inside it;
+ * the filmstrip follows the charts. Fixed, so a test can find a bar on a screenshot. */
+#define RB_ANALYSIS_REPORT_WIDTH 960
+#define RB_ANALYSIS_REPORT_HEADER_H 160
+#define RB_ANALYSIS_REPORT_CHART_H 250
+#define RB_ANALYSIS_REPORT_TITLE_H 30
+#define RB_ANALYSIS_REPORT_PLOT_X 72
+#define RB_ANALYSIS_REPORT_PLOT_Y 12
+#define RB_ANALYSIS_REPORT_PLOT_W 640
+#define RB_ANALYSIS_REPORT_PLOT_H 176
+#define RB_ANALYSIS_REPORT_THUMB_WIDTH 240 /* the default thumbnail width */
+
+/* A value axis from 0 to max, with a label every step. */
+struct rb_analysis_axis {
+    double max, step;
+};
+
+/* The axis for values up to data_max: step is 1, 2 or 5 times a power of ten, the smallest
+ * such that at most 5 steps reach data_max, and max the first multiple of step at or above it
+ * (to a relative 1e-9, so that rounding does not add a step).
+ * data_max not above 0 (or not finite) gives {1, 0.2}. */
+struct rb_analysis_axis rb_analysis_axis_fit(double data_max);
+
+/* A plot area: slot_count frames side by side along x, values up to axis.max along y. */
+struct rb_analysis_plot {
+    double x_px, y_px, width_px, height_px;
+    size_t slot_count;
+    struct rb_analysis_axis axis;
+};
+
+/* The centre of slot i along x: x_px + (i + 1/2) width_px / slot_count. */
+double rb_analysis_plot_x(const struct rb_analysis_plot *p, size_t i);
+/* The y of value v: y_px + height_px at 0, y_px at axis.max (not clamped). */
+double rb_analysis_plot_y(const struct rb_analysis_plot *p, double v);
+/* The width of a bar: 70% of a slot, at least one pixel. */
+double rb_analysis_plot_bar_width(const struct rb_analysis_plot *p);
+
+/* One frame of the report. Values not measured are NaN. */
+struct rb_analysis_report_frame {
+    int frame;
+    double wall_ms;       /* the sidecar's wall_ms */
+    double *pass_ms;      /* pass_count values: gpu_ms + cpu_ms; 0 where the frame lacks it */
+    double pass_total_ms; /* their sum */
+    double temporal_rmse; /* beauty RMSE against frame - 1 (NaN for a first frame, or a gap) */
+    double reference_temporal_rmse; /* the same in the reference */
+    double relmse;                  /* the beauty's relMSE against the reference's same frame */
+    double hit_ratio;               /* the mean of the hit-ratio image's first channel */
+    char *thumb, *reference_thumb, *hits_thumb; /* data: URIs; NULL when there is none */
+};
+
+struct rb_analysis_report_desc {
+    const char *dir;                      /* the sequence, SEQ */
+    const char *reference_dir;            /* REFSEQ, or NULL */
+    const struct rb_io_color_desc *color; /* the thumbnails' view transform; NULL: defaults */
+    uint32_t thumb_width_px;              /* 0: RB_ANALYSIS_REPORT_THUMB_WIDTH */
+};
+
+struct rb_analysis_report {
+    struct rb_analysis_sequence seq, ref; /* ref.frame_count is 0 without a reference */
+    char device[256], driver[256];        /* from the first frame's sidecar */
+    char integrator[64], reference_integrator[64], reference_spp[32]; /* EXR headers; "" */
+    uint32_t width_px, height_px;
+    uint32_t thumb_width_px; /* the thumbnails' width on the page */
+    char (*pass_names)[32];  /* pass_count passes, in order of first appearance */
+    size_t pass_count;
+    struct rb_analysis_report_frame *frames; /* seq.frame_count */
+    bool has_reference, has_hits;
+};
+
+/* Reads every frame of desc->dir (its EXR's beauty, its timing sidecar, its hit-ratio image
+ * when the sequence has them) and of the reference, and computes the report's series and
+ * thumbnails. Every frame of the sequence needs a sidecar and, with a reference, the same
+ * frame of the same size there; hit-ratio images are in every frame or in none. Fails with
+ * the readers' statuses and a message naming the file, RB_E_INVALID for frames that do not
+ * match, RB_E_NOMEM; *out only on success. */
+enum rb_status rb_analysis_report_create(const struct rb_analysis_report_desc *desc,
+                                         struct rb_analysis_report **out, struct rb_err *err);
+void rb_analysis_report_destroy(struct rb_analysis_report *r);
+
+/* Writes the report as one self-contained HTML page (inline CSS and SVG, thumbnails as data:
+ * URIs, no script, nothing fetched) to path, atomically. */
+enum rb_status rb_analysis_report_write(const struct rb_analysis_report *r, const char *path,
+                                        struct rb_err *err);
 
 #endif

@@ -642,39 +642,39 @@ static uint8_t quantize(float v)
     return (uint8_t)(v * 255.0f + 0.5f);
 }
 
-enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t height_px,
-                                   const float *rgba, const struct rb_io_color_desc *desc,
-                                   struct rb_err *err)
+/* The display bytes of scene-linear RGBA (count pixels, premultiplied): unpremultiplied, through
+ * desc's view transform (or none for data), quantized to 8 bits. what names the image in
+ * messages. *out (count*4 bytes, freed with free()) only on success. */
+static enum rb_status display_bytes(const char *what, uint32_t width_px, uint32_t height_px,
+                                    const float *rgba, const struct rb_io_color_desc *desc,
+                                    bool is_data, uint8_t **out, struct rb_err *err)
 {
     enum rb_status st = RB_OK;
     float *work = NULL;
     uint8_t *bytes = NULL;
     char msg[480];
 
-    if (!path || !*path)
-        return rb_errf(err, RB_E_INVALID, "preview: empty path");
     if (!width_px || !height_px || !rgba)
-        return rb_errf(err, RB_E_INVALID, "preview '%s': empty image", path);
-
+        return rb_errf(err, RB_E_INVALID, "%s: empty image", what);
     const char *config = desc && desc->config && *desc->config ? desc->config : NULL;
-    if (!config) {
+    if (!config && !is_data) {
         const char *env = getenv("OCIO");
         config = env && *env ? env : rb_io_default_ocio_config();
     }
     struct stat sb;
-    if (stat(config, &sb) != 0)
+    if (config && stat(config, &sb) != 0)
         return rb_errf(err, RB_E_IO, "ocio: cannot read config '%s': %s", config, strerror(errno));
-    if (!S_ISREG(sb.st_mode))
+    if (config && !S_ISREG(sb.st_mode))
         return rb_errf(err, RB_E_IO, "ocio: cannot read config '%s': not a regular file", config);
 
     size_t count = (size_t)width_px * height_px;
     size_t fbytes = mul3(count, 4, sizeof(float));
     if (!fbytes)
-        return rb_errf(err, RB_E_INVALID, "preview '%s': image too large", path);
+        return rb_errf(err, RB_E_INVALID, "%s: image too large", what);
     work = malloc(fbytes);
     bytes = malloc(count * 4);
     if (!work || !bytes) {
-        st = rb_errf(err, RB_E_NOMEM, "preview '%s': out of memory", path);
+        st = rb_errf(err, RB_E_NOMEM, "%s: out of memory", what);
         goto out;
     }
     /* The render is premultiplied; PNG stores unassociated alpha, and the view transform is
@@ -687,23 +687,35 @@ enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t
                 work[p * 4 + c] /= a;
     }
 
-    int r =
-        rb_ocio_display_view_apply(config, desc ? desc->display : NULL, desc ? desc->view : NULL,
-                                   work, width_px, height_px, NULL, NULL, 0, msg, sizeof(msg));
+    int r = is_data ? RB_OCIO_OK
+                    : rb_ocio_display_view_apply(config, desc ? desc->display : NULL,
+                                                 desc ? desc->view : NULL, work, width_px,
+                                                 height_px, NULL, NULL, 0, msg, sizeof(msg));
     if (r != RB_OCIO_OK) {
         st = rb_errf(err, r == RB_OCIO_NO_NAME ? RB_E_INVALID : RB_E_EXTERNAL, "%s", msg);
         goto out;
     }
     for (size_t i = 0; i < count * 4; i++)
         bytes[i] = quantize(work[i]);
+    *out = bytes;
+    bytes = NULL;
+out:
+    free(work);
+    free(bytes);
+    return st;
+}
 
+/* An 8-bit RGBA PNG of display bytes. */
+static struct rb_oiio_write_desc png_desc(uint32_t width_px, uint32_t height_px,
+                                          const uint8_t *bytes)
+{
     static const char *const names[4] = {"R", "G", "B", "A"};
     /* The bytes are final: OIIO must not (de)associate alpha on the way out. */
-    const struct rb_oiio_attr attrs[] = {
+    static const struct rb_oiio_attr attrs[] = {
         {.name = "oiio:UnassociatedAlpha", .type = RB_OIIO_ATTR_INT, .i = 1},
         {.name = "Software", .type = RB_OIIO_ATTR_STRING, .s = "raybundle " RB_VERSION},
     };
-    struct rb_oiio_write_desc wd = {
+    return (struct rb_oiio_write_desc){
         .format_name = "png",
         .width_px = width_px,
         .height_px = height_px,
@@ -714,10 +726,99 @@ enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t
         .attrs = attrs,
         .attr_count = sizeof(attrs) / sizeof(attrs[0]),
     };
+}
+
+enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t height_px,
+                                   const float *rgba, const struct rb_io_color_desc *desc,
+                                   struct rb_err *err)
+{
+    uint8_t *bytes = NULL;
+    char what[600];
+    if (!path || !*path)
+        return rb_errf(err, RB_E_INVALID, "preview: empty path");
+    snprintf(what, sizeof(what), "preview '%s'", path);
+    enum rb_status st = display_bytes(what, width_px, height_px, rgba, desc, false, &bytes, err);
+    if (st)
+        return st;
+    struct rb_oiio_write_desc wd = png_desc(width_px, height_px, bytes);
     st = write_image_atomic(path, ".png", &wd, err);
-out:
-    free(work);
     free(bytes);
+    return st;
+}
+
+/* The encoded PNG, kept by the shim's sink. */
+struct encoded {
+    void *bytes;
+    size_t size;
+};
+
+static bool keep_encoded(const void *bytes, size_t size, void *user)
+{
+    struct encoded *e = user;
+    if (!(e->bytes = malloc(size ? size : 1)))
+        return false;
+    memcpy(e->bytes, bytes, size);
+    e->size = size;
+    return true;
+}
+
+enum rb_status rb_io_thumbnail_data_uri(uint32_t width_px, uint32_t height_px, const float *rgba,
+                                        const struct rb_io_thumbnail_desc *desc, char **out,
+                                        struct rb_err *err)
+{
+    static const char prefix[] = "data:image/png;base64,";
+    struct rb_io_thumbnail_desc d = desc ? *desc : (struct rb_io_thumbnail_desc){0};
+    uint32_t w = d.width_px ? d.width_px : width_px, h = d.height_px ? d.height_px : height_px;
+    float *small = NULL;
+    uint8_t *bytes = NULL;
+    struct encoded png = {0};
+    char *uri = NULL, msg[400];
+    enum rb_status st = RB_OK;
+
+    if (!width_px || !height_px || !rgba)
+        return rb_errf(err, RB_E_INVALID, "thumbnail: empty image");
+    if (w > width_px || h > height_px)
+        return rb_errf(err, RB_E_INVALID, "thumbnail: %ux%u is larger than the %ux%u image", w, h,
+                       width_px, height_px);
+    if (w != width_px || h != height_px) {
+        if (!(small = malloc((size_t)w * h * 4 * sizeof(float)))) {
+            st = rb_errf(err, RB_E_NOMEM, "thumbnail: out of memory");
+            goto out;
+        }
+        if (rb_oiio_resize(rgba, width_px, height_px, 4, small, w, h, msg, sizeof(msg))) {
+            st = rb_errf(err, RB_E_EXTERNAL, "thumbnail: cannot resize: %s", msg);
+            goto out;
+        }
+    }
+    if ((st = display_bytes("thumbnail", w, h, small ? small : rgba, d.color, d.is_data, &bytes,
+                            err)))
+        goto out;
+    struct rb_oiio_write_desc wd = png_desc(w, h, bytes);
+    wd.path = "thumbnail.png";
+    wd.sink = keep_encoded;
+    wd.sink_user = &png;
+    if (rb_oiio_write(&wd, msg, sizeof(msg))) {
+        st = rb_errf(err, RB_E_EXTERNAL, "thumbnail: cannot encode a PNG: %s", msg);
+        goto out;
+    }
+    size_t len = 4 * ((png.size + 2) / 3) + 1;
+    if (!(uri = malloc(sizeof(prefix) - 1 + len))) {
+        st = rb_errf(err, RB_E_NOMEM, "thumbnail: out of memory");
+        goto out;
+    }
+    memcpy(uri, prefix, sizeof(prefix) - 1);
+    if (rb_oiio_base64_encode(png.bytes, png.size, uri + sizeof(prefix) - 1, len, msg,
+                              sizeof(msg))) {
+        st = rb_errf(err, RB_E_EXTERNAL, "thumbnail: %s", msg);
+        goto out;
+    }
+    *out = uri;
+    uri = NULL;
+out:
+    free(uri);
+    free(png.bytes);
+    free(bytes);
+    free(small);
     return st;
 }
 

@@ -103,6 +103,22 @@ enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t
                                    const float *rgba, const struct rb_io_color_desc *desc,
                                    struct rb_err *err);
 
+/* A thumbnail for an HTML page: a PNG inline, as a data: URI. */
+struct rb_io_thumbnail_desc {
+    uint32_t width_px, height_px;         /* the thumbnail's size, at most the image's; 0: its */
+    const struct rb_io_color_desc *color; /* the view transform; NULL: as rb_io_preview_write's */
+    bool is_data; /* values are data (a hit ratio): shown as they are, no view transform */
+};
+
+/* Resizes premultiplied scene-linear RGBA (width*height*4 floats) with OpenImageIO's filtered
+ * resize, converts it as rb_io_preview_write does (or, for data, quantizes [0, 1] to 8 bits),
+ * encodes an 8-bit PNG in memory and returns "data:image/png;base64,..." in *out (freed with
+ * free()), only on success. Fails with RB_E_INVALID for a bad size, RB_E_EXTERNAL from the
+ * libraries, RB_E_IO for an unreadable config, RB_E_NOMEM. */
+enum rb_status rb_io_thumbnail_data_uri(uint32_t width_px, uint32_t height_px, const float *rgba,
+                                        const struct rb_io_thumbnail_desc *desc, char **out,
+                                        struct rb_err *err);
+
 /* The versions of the image and colour libraries, e.g. "OpenImageIO 2.4.7, OpenColorIO 2.1.2"
  * (for `raybundle info` and bug reports). */
 const char *rb_io_library_versions(void);
@@ -156,6 +172,10 @@ struct rb_io_timing_file {
  * JSON path, e.g. 'passes[2].gpu_ms'). */
 enum rb_status rb_io_timing_read(const char *path, struct rb_io_timing_file *out,
                                  struct rb_err *err);
+/* Parses a sidecar's text (size bytes, not necessarily NUL-terminated) as rb_io_timing_read
+ * does; name stands for the file in messages. */
+enum rb_status rb_io_timing_parse(const char *name, const char *text, size_t size,
+                                  struct rb_io_timing_file *out, struct rb_err *err);
 void rb_io_timing_file_release(struct rb_io_timing_file *t);
 
 /* bench.json, what raybundle bench records beside its runs' sidecars (run-01/, run-02/, ...). */
@@ -179,6 +199,9 @@ enum rb_status rb_io_bench_write(const char *path, const struct rb_io_bench *b, 
 /* Reads bench.json into *out (released with rb_io_bench_release, also after a failure); fails
  * as rb_io_timing_read does. */
 enum rb_status rb_io_bench_read(const char *path, struct rb_io_bench *out, struct rb_err *err);
+/* Parses bench.json's text as rb_io_bench_read does; name stands for the file in messages. */
+enum rb_status rb_io_bench_parse(const char *name, const char *text, size_t size,
+                                 struct rb_io_bench *out, struct rb_err *err);
 void rb_io_bench_release(struct rb_io_bench *b);
 
 #endif

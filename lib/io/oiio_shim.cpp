@@ -3,7 +3,11 @@
 // io.c could decide instead.
 #include "io/oiio_shim.h"
 
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -105,6 +109,14 @@ extern "C" int rb_oiio_write(const struct rb_oiio_write_desc *d, char *msg,
             }
         }
 
+        OIIO::Filesystem::IOVecOutput memory;
+        if (d->sink) {
+            if (!out->supports("ioproxy"))
+                return fail(msg, msg_size,
+                            std::string("format '") + d->format_name +
+                                "' cannot be written to memory");
+            out->set_ioproxy(&memory);
+        }
         if (!out->open(d->path, spec))
             return fail(msg, msg_size, out->geterror());
         if (!out->write_image(pixel_type, d->pixels)) {
@@ -114,6 +126,47 @@ extern "C" int rb_oiio_write(const struct rb_oiio_write_desc *d, char *msg,
         }
         if (!out->close())
             return fail(msg, msg_size, out->geterror());
+        if (d->sink && !d->sink(memory.buffer().data(), memory.buffer().size(), d->sink_user))
+            return fail(msg, msg_size, "out of memory for the encoded image");
+        return RB_OIIO_OK;
+    } catch (const std::exception &e) {
+        return fail(msg, msg_size, e.what());
+    } catch (...) {
+        return fail_unknown(msg, msg_size);
+    }
+}
+
+extern "C" int rb_oiio_resize(const float *src, uint32_t width_px, uint32_t height_px,
+                              uint32_t channel_count, float *dst, uint32_t dst_width_px,
+                              uint32_t dst_height_px, char *msg, size_t msg_size) noexcept
+{
+    try {
+        quiet_debug();
+        const OIIO::ImageBuf in(OIIO::ImageSpec(int(width_px), int(height_px), int(channel_count),
+                                                OIIO::TypeDesc::FLOAT),
+                                const_cast<float *>(src));
+        OIIO::ImageBuf out(OIIO::ImageSpec(int(dst_width_px), int(dst_height_px),
+                                           int(channel_count), OIIO::TypeDesc::FLOAT),
+                           dst);
+        if (!OIIO::ImageBufAlgo::resize(out, in))
+            return fail(msg, msg_size, out.geterror());
+        return RB_OIIO_OK;
+    } catch (const std::exception &e) {
+        return fail(msg, msg_size, e.what());
+    } catch (...) {
+        return fail_unknown(msg, msg_size);
+    }
+}
+
+extern "C" int rb_oiio_base64_encode(const void *data, size_t size, char *out, size_t out_size,
+                                     char *msg, size_t msg_size) noexcept
+{
+    try {
+        std::string s =
+            OIIO::Strutil::base64_encode(OIIO::string_view(static_cast<const char *>(data), size));
+        if (s.size() + 1 > out_size)
+            return fail(msg, msg_size, "base64: the output buffer is too small");
+        std::memcpy(out, s.c_str(), s.size() + 1);
         return RB_OIIO_OK;
     } catch (const std::exception &e) {
         return fail(msg, msg_size, e.what());

@@ -43,8 +43,13 @@ struct rb_oiio_attr {
     uint32_t fv_count;
 };
 
+/* Receives an image encoded in memory (rb_oiio_write with a sink): size bytes, valid during the
+ * call. Returns false when it cannot keep them (out of memory). */
+typedef bool (*rb_oiio_sink_fn)(const void *bytes, size_t size, void *user);
+
 struct rb_oiio_write_desc {
-    const char *path;        /* file to create (a temporary name; io.c renames it) */
+    const char *path;        /* file to create (a temporary name; io.c renames it); with a sink,
+                              * only the name the format and messages see */
     const char *format_name; /* OIIO plugin: "openexr", "png" */
     uint32_t width_px, height_px, channel_count;
     const char *const *channel_names; /* channel_count names, in file order */
@@ -53,6 +58,8 @@ struct rb_oiio_write_desc {
     const void *pixels;               /* interleaved, rows top to bottom */
     const struct rb_oiio_attr *attrs;
     size_t attr_count;
+    rb_oiio_sink_fn sink; /* NULL: write the file; else encode in memory and hand it to sink */
+    void *sink_user;
 };
 
 /* Writes one image (one part, scanlines) exactly as described. */
@@ -61,6 +68,18 @@ const char *rb_oiio_version(void) RB_SHIM_NOEXCEPT;
 
 int rb_oiio_write(const struct rb_oiio_write_desc *desc, char *msg,
                   size_t msg_size) RB_SHIM_NOEXCEPT;
+
+/* Resizes src (width*height*channel_count floats, interleaved) into dst, which the caller
+ * allocates (dst_width*dst_height*channel_count floats), with ImageBufAlgo::resize's default
+ * filter for the change of size. */
+int rb_oiio_resize(const float *src, uint32_t width_px, uint32_t height_px, uint32_t channel_count,
+                   float *dst, uint32_t dst_width_px, uint32_t dst_height_px, char *msg,
+                   size_t msg_size) RB_SHIM_NOEXCEPT;
+
+/* Encodes size bytes in base64 (RFC 4648, padded) into out, NUL-terminated; out_size must be at
+ * least 4 * ((size + 2) / 3) + 1. */
+int rb_oiio_base64_encode(const void *data, size_t size, char *out, size_t out_size, char *msg,
+                          size_t msg_size) RB_SHIM_NOEXCEPT;
 
 /* An open image file (subimage 0, miplevel 0). */
 struct rb_oiio_input;

@@ -1,7 +1,8 @@
-/* Timing files read back, and bench.json: the sidecars rb_io_timing_write writes (io.c) parsed
- * with Jansson, and the record raybundle bench leaves beside its runs. Only the fields
- * raybundle timing compare needs are read; a missing or mistyped one is an error that names its
- * JSON path, a file that does not parse one that names its line and column. */
+/* Timing files read back, and bench.json: the sidecars rb_io_timing_write writes and the record
+ * raybundle bench leaves beside its runs (written by io.c and bench.c), parsed with Jansson.
+ * Only the fields raybundle timing compare and report need are read; a missing or mistyped one
+ * is an error that names its JSON path, a file that does not parse one that names its line and
+ * column. Needs only core and Jansson, so the fuzz replays link it alone. */
 #include "io/io.h"
 
 #include <errno.h>
@@ -13,14 +14,21 @@
 
 /* ---- reading ------------------------------------------------------------------------------ */
 
-static enum rb_status load(const char *path, json_t **out, struct rb_err *err)
+/* The object in path's file, or in text (size bytes) when text is given (path then names it). */
+static enum rb_status load(const char *path, const char *text, size_t size, json_t **out,
+                           struct rb_err *err)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return rb_errf(err, RB_E_IO, "cannot open '%s': %s", path, strerror(errno));
     json_error_t je;
-    json_t *root = json_loadf(f, JSON_REJECT_DUPLICATES, &je);
-    fclose(f);
+    json_t *root;
+    if (text) {
+        root = json_loadb(text, size, JSON_REJECT_DUPLICATES, &je);
+    } else {
+        FILE *f = fopen(path, "rb");
+        if (!f)
+            return rb_errf(err, RB_E_IO, "cannot open '%s': %s", path, strerror(errno));
+        root = json_loadf(f, JSON_REJECT_DUPLICATES, &je);
+        fclose(f);
+    }
     if (!root)
         return rb_errf(err, RB_E_PARSE, "%s:%d:%d: %s", path, je.line, je.column, je.text);
     if (!json_is_object(root)) {
@@ -116,12 +124,12 @@ static enum rb_status read_pass(json_t *p, size_t i, struct rb_pass_time *out, c
     return RB_OK;
 }
 
-enum rb_status rb_io_timing_read(const char *path, struct rb_io_timing_file *out,
-                                 struct rb_err *err)
+static enum rb_status timing_load(const char *path, const char *text, size_t size,
+                                  struct rb_io_timing_file *out, struct rb_err *err)
 {
     memset(out, 0, sizeof(*out));
     json_t *root = NULL;
-    enum rb_status st = load(path, &root, err);
+    enum rb_status st = load(path, text, size, &root, err);
     if (st)
         return st;
     long long frame = 0;
@@ -149,6 +157,18 @@ out:
     return st;
 }
 
+enum rb_status rb_io_timing_read(const char *path, struct rb_io_timing_file *out,
+                                 struct rb_err *err)
+{
+    return timing_load(path, NULL, 0, out, err);
+}
+
+enum rb_status rb_io_timing_parse(const char *name, const char *text, size_t size,
+                                  struct rb_io_timing_file *out, struct rb_err *err)
+{
+    return timing_load(name, text ? text : "", size, out, err);
+}
+
 void rb_io_timing_file_release(struct rb_io_timing_file *t)
 {
     if (!t)
@@ -159,54 +179,12 @@ void rb_io_timing_file_release(struct rb_io_timing_file *t)
 
 /* ---- bench.json --------------------------------------------------------------------------- */
 
-/* Sets key to v in obj, taking v; false when either allocation failed. */
-static bool set(json_t *obj, const char *key, json_t *v)
-{
-    return v && json_object_set_new(obj, key, v) == 0;
-}
-
-enum rb_status rb_io_bench_write(const char *path, const struct rb_io_bench *b, struct rb_err *err)
-{
-    json_t *root = json_object(), *frames = json_array(), *options = json_array();
-    bool ok = root && frames && options;
-    for (size_t i = 0; ok && i < b->frame_count; i++)
-        ok = json_array_append_new(frames, json_integer(b->frames[i])) == 0;
-    for (size_t i = 0; ok && i < b->option_count; i++)
-        ok = json_array_append_new(options, json_string(b->options[i])) == 0;
-    ok = ok && set(root, "device", json_string(b->device)) &&
-         set(root, "driver", json_string(b->driver)) && set(root, "build", json_string(b->build)) &&
-         set(root, "job", json_string(b->job)) && set(root, "job_hash", json_string(b->job_hash)) &&
-         set(root, "integrator", json_string(b->integrator)) &&
-         set(root, "width", json_integer(b->width_px)) &&
-         set(root, "height", json_integer(b->height_px)) &&
-         set(root, "runs", json_integer(b->run_count)) &&
-         set(root, "order", json_string(b->order)) && set(root, "frames", json_incref(frames)) &&
-         set(root, "options", json_incref(options));
-    char *text = ok ? json_dumps(root, JSON_INDENT(2)) : NULL;
-    json_decref(frames);
-    json_decref(options);
-    json_decref(root);
-    if (!text)
-        return rb_errf(err, RB_E_NOMEM, "'%s': out of memory (or a string that is not UTF-8)",
-                       path);
-    size_t len = strlen(text);
-    char *data = realloc(text, len + 2);
-    if (!data) {
-        free(text);
-        return rb_errf(err, RB_E_NOMEM, "'%s': out of memory", path);
-    }
-    data[len] = '\n';
-    data[len + 1] = '\0';
-    enum rb_status st = rb_io_write_atomic(path, data, len + 1, err);
-    free(data);
-    return st;
-}
-
-enum rb_status rb_io_bench_read(const char *path, struct rb_io_bench *out, struct rb_err *err)
+static enum rb_status bench_load(const char *path, const char *text, size_t size,
+                                 struct rb_io_bench *out, struct rb_err *err)
 {
     memset(out, 0, sizeof(*out));
     json_t *root = NULL, *frames = NULL, *options = NULL;
-    enum rb_status st = load(path, &root, err);
+    enum rb_status st = load(path, text, size, &root, err);
     if (st)
         return st;
     long long w = 0, h = 0, runs = 0;
@@ -259,6 +237,17 @@ enum rb_status rb_io_bench_read(const char *path, struct rb_io_bench *out, struc
 out:
     json_decref(root);
     return st;
+}
+
+enum rb_status rb_io_bench_read(const char *path, struct rb_io_bench *out, struct rb_err *err)
+{
+    return bench_load(path, NULL, 0, out, err);
+}
+
+enum rb_status rb_io_bench_parse(const char *name, const char *text, size_t size,
+                                 struct rb_io_bench *out, struct rb_err *err)
+{
+    return bench_load(name, text ? text : "", size, out, err);
 }
 
 void rb_io_bench_release(struct rb_io_bench *b)

@@ -50,6 +50,7 @@ check "make install succeeds" test $? -eq 0
 stamp >"$T/after"
 check "make install with another PREFIX rebuilds nothing" cmp -s "$T/before" "$T/after"
 for f in opt/rb/bin/raybundle opt/rb/share/man/man1/raybundle.1 \
+    opt/rb/share/man/man1/raybundle-report.1 \
     opt/rb/share/man/man5/raybundle-job.5 opt/rb/share/raybundle/ocio/config.ocio; do
     check "installs $f" test -f "$T/stage/$f"
 done

@@ -14,4 +14,5 @@ done
 check "the job parser's fuzz target was built" test -x "$BUILD/tests/fuzz/fuzz_job"
 check "the job parser's sanitized replay was built" test -x "$BUILD/asan/tests/fuzz/fuzz_job"
 check "the glTF loader's sanitized replay was built" test -x "$BUILD/asan/tests/fuzz/fuzz_scene"
+check "the timing readers' sanitized replay was built" test -x "$BUILD/asan/tests/fuzz/fuzz_timing"
 done_testing

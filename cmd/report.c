@@ -1,0 +1,99 @@
+/* raybundle report: reads a rendered sequence (and a reference sequence) through lib/analysis,
+ * writes one self-contained HTML page of plots and thumbnails, and says where it went. The page
+ * and its numbers are lib/analysis/report.c's. */
+#include "cmd.h"
+
+#include <errno.h>
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "analysis/analysis.h"
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: raybundle report SEQ [--reference REFSEQ] -o REPORT.html\n"
+               "\n"
+               "Writes one self-contained HTML page about the sequence rendered into the\n"
+               "directory SEQ: time per pass and frame time over the frames, the frame-to-frame\n"
+               "difference, the error against the reference sequence REFSEQ, hit ratios where\n"
+               "the sequence has them, and thumbnails through the OpenColorIO view.\n"
+               "\n"
+               "  --reference DIR   the reference sequence (raybundle reference), frame by frame\n"
+               "  -o, --output PATH the page to write\n"
+               "  --thumb-width N   thumbnails N pixels wide at most (240)\n"
+               "  -h, --help        show this help\n"
+               "\n"
+               "Exit status: 0 written, 1 the page could not be written, 2 bad usage or a\n"
+               "sequence that cannot be read or does not match.\n");
+}
+
+int cmd_report(int argc, char **argv)
+{
+    enum { O_REFERENCE = 256, O_THUMB_WIDTH };
+    static const struct option opts[] = {
+        {"reference", required_argument, NULL, O_REFERENCE},
+        {"output", required_argument, NULL, 'o'},
+        {"thumb-width", required_argument, NULL, O_THUMB_WIDTH},
+        {"help", no_argument, NULL, 'h'},
+        {0},
+    };
+    struct rb_analysis_report_desc desc = {0};
+    const char *output = NULL;
+    int c;
+    optind = 1;
+    while ((c = getopt_long(argc, argv, "ho:", opts, NULL)) != -1) {
+        switch (c) {
+        case O_REFERENCE: desc.reference_dir = optarg; break;
+        case 'o': output = optarg; break;
+        case O_THUMB_WIDTH: {
+            char *end = NULL;
+            errno = 0;
+            long v = strtol(optarg, &end, 10);
+            if (end == optarg || *end || errno || v < 1 || v > 4096) {
+                cmd_error("--thumb-width expects 1..4096 pixels, got '%s'", optarg);
+                return RB_EXIT_USAGE;
+            }
+            desc.thumb_width_px = (uint32_t)v;
+            break;
+        }
+        case 'h': usage(stdout); return RB_EXIT_OK;
+        default: usage(stderr); return RB_EXIT_USAGE;
+        }
+    }
+    if (argc - optind != 1) {
+        cmd_error(argc - optind ? "report takes one sequence directory, SEQ"
+                                : "report needs a sequence directory, SEQ");
+        usage(stderr);
+        return RB_EXIT_USAGE;
+    }
+    if (!output) {
+        cmd_error("report needs -o REPORT.html");
+        usage(stderr);
+        return RB_EXIT_USAGE;
+    }
+    desc.dir = argv[optind];
+
+    struct rb_err err = RB_ERR_INIT;
+    struct rb_analysis_report *r = NULL;
+    int rc = RB_EXIT_OK;
+    enum rb_status st;
+    if ((st = rb_analysis_report_create(&desc, &r, &err))) {
+        cmd_error("%s", err.msg);
+        rc = st == RB_E_NOMEM ? RB_EXIT_FAILED : RB_EXIT_USAGE;
+        goto out;
+    }
+    if ((st = rb_io_make_parent_dirs(output, &err)) ||
+        (st = rb_analysis_report_write(r, output, &err))) {
+        cmd_error("%s", err.msg);
+        rc = RB_EXIT_FAILED;
+        goto out;
+    }
+    printf("%zu frame%s of %s/%s.####.exr%s%s in %s\n", r->seq.frame_count,
+           r->seq.frame_count == 1 ? "" : "s", r->seq.dir, r->seq.stem,
+           r->has_reference ? " against " : "", r->has_reference ? r->ref.dir : "", output);
+out:
+    rb_analysis_report_destroy(r);
+    return rc;
+}
