@@ -66,35 +66,8 @@ static void destroy(struct rb_integrator *it, void *state)
     free(d);
 }
 
-static enum rb_status buffer(struct rb_gpu *gpu, VkDeviceSize bytes, bool host_visible,
-                             const char *name, struct rb_gpu_buffer *out, struct rb_err *err)
-{
-    return rb_gpu_buffer_init(
-        gpu,
-        &(struct rb_gpu_buffer_desc){
-            .size_bytes = bytes,
-            .usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-            .is_host_visible = host_visible,
-            .debug_name = name,
-        },
-        out, err);
-}
-
-static enum rb_status image(struct rb_gpu *gpu, uint32_t w, uint32_t h, uint32_t layers,
-                            VkFormat format, VkImageUsageFlags usage, bool layer_views,
-                            const char *name, struct rb_gpu_image *out, struct rb_err *err)
-{
-    return rb_gpu_image_init(gpu,
-                             &(struct rb_gpu_image_desc){.width_px = w,
-                                                         .height_px = h,
-                                                         .layer_count = layers,
-                                                         .format = format,
-                                                         .usage = usage,
-                                                         .is_array = layer_views,
-                                                         .has_layer_views = layer_views,
-                                                         .debug_name = name},
-                             out, err);
-}
+/* The integrator's buffers are storage buffers, filled by the shaders or uploaded. */
+#define STORAGE (VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT)
 
 /* The fixed quasi-random table (BDPT.md "Sampling"): VPL i draws its light and its direction
  * from rows i, bundle i its direction from row K_v + i. */
@@ -159,8 +132,8 @@ static enum rb_status upload_emitters(struct rb_integrator *it, struct rb_bdpt_f
         dst += p->vertex_count;
     }
     b->emitter_count = count;
-    enum rb_status st = buffer(it->gpu, (VkDeviceSize)(count ? count : 1) * sizeof(*list), false,
-                               "bdpt.emitters", &b->emitters, err);
+    enum rb_status st = rb_frame_buffer(it->gpu, (VkDeviceSize)(count ? count : 1) * sizeof(*list),
+                                        STORAGE, false, "bdpt.emitters", &b->emitters, err);
     if (st == RB_OK && count)
         st = rb_gpu_buffer_upload(it->gpu, &b->emitters, list, count * sizeof(*list), err);
     free(list);
@@ -174,20 +147,22 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
     struct rb_bdpt_frame *b = &d->b;
     uint32_t kv = b->vpl_count ? b->vpl_count : 1, kb = b->bundle_count ? b->bundle_count : 1;
     enum rb_status st;
-    if ((st = buffer(gpu, 8 * sizeof(uint32_t), false, "bdpt.bounds", &b->bounds, err)) ||
-        (st = buffer(gpu, (VkDeviceSize)(kv + kb) * sizeof(struct rb_gpu_bdpt_sample), false,
-                     "bdpt.samples", &b->samples, err)) ||
-        (st = buffer(gpu, RB_MAX_LIGHTS * sizeof(struct rb_gpu_bdpt_light), true, "bdpt.lights",
-                     &b->lights, err)) ||
-        (st = buffer(gpu, kv * sizeof(struct rb_gpu_vpl), false, "bdpt.vpls", &b->vpls, err)) ||
-        (st = buffer(gpu, kv * sizeof(struct rb_gpu_view), false, "bdpt.vpl_views", &b->vpl_views,
-                     err)) ||
-        (st = buffer(gpu, kb * sizeof(struct rb_gpu_view), false, "bdpt.bundle_views",
-                     &b->bundle_views, err)) ||
-        (st = buffer(gpu, kb * sizeof(struct rb_gpu_list_counter), true, "bdpt.usage", &d->usage,
-                     err)) ||
-        (st = buffer(gpu, sizeof(struct rb_gpu_bdpt_emit_info), false, "bdpt.emit_info",
-                     &b->emit_info, err)) ||
+    if ((st = rb_frame_buffer(gpu, 8 * sizeof(uint32_t), STORAGE, false, "bdpt.bounds", &b->bounds,
+                              err)) ||
+        (st = rb_frame_buffer(gpu, (VkDeviceSize)(kv + kb) * sizeof(struct rb_gpu_bdpt_sample),
+                              STORAGE, false, "bdpt.samples", &b->samples, err)) ||
+        (st = rb_frame_buffer(gpu, RB_MAX_LIGHTS * sizeof(struct rb_gpu_bdpt_light), STORAGE, true,
+                              "bdpt.lights", &b->lights, err)) ||
+        (st = rb_frame_buffer(gpu, kv * sizeof(struct rb_gpu_vpl), STORAGE, false, "bdpt.vpls",
+                              &b->vpls, err)) ||
+        (st = rb_frame_buffer(gpu, kv * sizeof(struct rb_gpu_view), STORAGE, false,
+                              "bdpt.vpl_views", &b->vpl_views, err)) ||
+        (st = rb_frame_buffer(gpu, kb * sizeof(struct rb_gpu_view), STORAGE, false,
+                              "bdpt.bundle_views", &b->bundle_views, err)) ||
+        (st = rb_frame_buffer(gpu, kb * sizeof(struct rb_gpu_list_counter), STORAGE, true,
+                              "bdpt.usage", &d->usage, err)) ||
+        (st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_bdpt_emit_info), STORAGE, false,
+                              "bdpt.emit_info", &b->emit_info, err)) ||
         (st = upload_emitters(it, b, err)) || (st = upload_samples(gpu, b, err)))
         return st;
 
@@ -199,20 +174,20 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
     static const char *const rsm_names[RB_VIEW_RSM_TARGETS] = {
         "bdpt.rsm.position", "bdpt.rsm.normal", "bdpt.rsm.flux", "bdpt.rsm.material"};
     for (int i = 0; i < RB_VIEW_RSM_TARGETS && st == RB_OK; i++)
-        st = image(gpu, rsm, rsm, rsm_layers, rb_view_rsm_formats[i], target, true, rsm_names[i],
-                   &b->rsm[i], err);
+        st = rb_frame_image(gpu, rsm, rsm, rsm_layers, rb_view_rsm_formats[i], target, true,
+                            rsm_names[i], &b->rsm[i], err);
     if (st == RB_OK)
-        st = image(gpu, rsm, rsm, 1, VK_FORMAT_D32_SFLOAT,
-                   VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "bdpt.rsm.depth",
-                   &b->rsm_depth, err);
+        st = rb_frame_image(gpu, rsm, rsm, 1, VK_FORMAT_D32_SFLOAT,
+                            VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "bdpt.rsm.depth",
+                            &b->rsm_depth, err);
     if (st == RB_OK)
-        st = image(gpu, b->vpl_size_px, b->vpl_size_px, kv, VK_FORMAT_R32_SFLOAT,
-                   VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, true,
-                   "bdpt.vpl_maps", &b->vpl_maps, err);
+        st = rb_frame_image(gpu, b->vpl_size_px, b->vpl_size_px, kv, VK_FORMAT_R32_SFLOAT,
+                            VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, true,
+                            "bdpt.vpl_maps", &b->vpl_maps, err);
     if (st == RB_OK)
-        st = image(gpu, b->vpl_size_px, b->vpl_size_px, 1, VK_FORMAT_D32_SFLOAT,
-                   VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "bdpt.vpl_depth",
-                   &b->vpl_depth, err);
+        st = rb_frame_image(gpu, b->vpl_size_px, b->vpl_size_px, 1, VK_FORMAT_D32_SFLOAT,
+                            VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "bdpt.vpl_depth",
+                            &b->vpl_depth, err);
     uint64_t nodes =
         (uint64_t)it->job->integrator.bdpt.node_buffer_kib * 1024 / sizeof(struct rb_gpu_list_node);
     if (st == RB_OK)
@@ -234,14 +209,14 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
          "bdpt.filtered.indirect_diffuse", "bdpt.filtered.indirect_specular"}};
     const VkFormat f = VK_FORMAT_R32G32B32A32_SFLOAT;
     for (int i = 0; i < RB_BDPT_SPLIT_COUNT && st == RB_OK; i++)
-        st = image(gpu, sw, sh, 1, f, storage, false, split_names[i], &b->split[i], err);
+        st = rb_frame_image(gpu, sw, sh, 1, f, storage, false, split_names[i], &b->split[i], err);
     for (int i = 0; i < RB_BDPT_LIGHT_COUNT && st == RB_OK; i++)
-        if ((st = image(gpu, sw, sh, 1, f, storage, false, light_names[0][i], &b->accum[i], err)) ==
-                RB_OK &&
-            (st = image(gpu, frame->width_px, frame->height_px, 1, f, storage, false,
-                        light_names[1][i], &b->gathered[i], err)) == RB_OK)
-            st = image(gpu, frame->width_px, frame->height_px, 1, f, storage, false,
-                       light_names[2][i], &b->filtered[i], err);
+        if ((st = rb_frame_image(gpu, sw, sh, 1, f, storage, false, light_names[0][i], &b->accum[i],
+                                 err)) == RB_OK &&
+            (st = rb_frame_image(gpu, frame->width_px, frame->height_px, 1, f, storage, false,
+                                 light_names[1][i], &b->gathered[i], err)) == RB_OK)
+            st = rb_frame_image(gpu, frame->width_px, frame->height_px, 1, f, storage, false,
+                                light_names[2][i], &b->filtered[i], err);
     if (st)
         return st;
 

@@ -14,9 +14,9 @@ static uint32_t shadow_layers_for(enum rb_light_type t)
     return t == RB_LIGHT_POINT ? 6 : 1;
 }
 
-static enum rb_status make_buffer(struct rb_gpu *gpu, VkDeviceSize size, VkBufferUsageFlags usage,
-                                  bool host, const char *name, struct rb_gpu_buffer *out,
-                                  struct rb_err *err)
+enum rb_status rb_frame_buffer(struct rb_gpu *gpu, VkDeviceSize size, VkBufferUsageFlags usage,
+                               bool host, const char *name, struct rb_gpu_buffer *out,
+                               struct rb_err *err)
 {
     return rb_gpu_buffer_init(gpu,
                               &(struct rb_gpu_buffer_desc){.size_bytes = size ? size : 16,
@@ -30,7 +30,7 @@ static enum rb_status upload_buffer(struct rb_gpu *gpu, const void *data, VkDevi
                                     VkBufferUsageFlags usage, const char *name,
                                     struct rb_gpu_buffer *out, struct rb_err *err)
 {
-    enum rb_status st = make_buffer(gpu, size, usage, false, name, out, err);
+    enum rb_status st = rb_frame_buffer(gpu, size, usage, false, name, out, err);
     if (st == RB_OK && size)
         st = rb_gpu_buffer_upload(gpu, out, data, size, err);
     return st;
@@ -76,8 +76,8 @@ static enum rb_status upload_texture_layer(struct rb_gpu *gpu, const struct rb_s
     struct rb_gpu_buffer staging = {0};
     struct rb_gpu_image src = {0};
     VkDeviceSize bytes = (VkDeviceSize)tex->width_px * tex->height_px * 4;
-    enum rb_status st = make_buffer(gpu, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true,
-                                    "texture staging", &staging, err);
+    enum rb_status st = rb_frame_buffer(gpu, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true,
+                                        "texture staging", &staging, err);
     if (st)
         goto out;
     memcpy(staging.mapped, tex->rgba8, bytes);
@@ -280,21 +280,22 @@ static enum rb_status upload_geometry(struct rb_gpu *gpu, const struct rb_scene 
             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "morph.deltas", &frame->morph_deltas, err);
     for (uint32_t s = 0; s < frame->slot_count && st == RB_OK; s++) {
         struct rb_frame_slot *slot = &frame->slots[s];
-        st = make_buffer(gpu, (VkDeviceSize)pose->instance_count * sizeof(struct rb_gpu_instance),
-                         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "instances", &slot->instances,
-                         err);
+        st = rb_frame_buffer(
+            gpu, (VkDeviceSize)pose->instance_count * sizeof(struct rb_gpu_instance),
+            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "instances", &slot->instances, err);
         if (st == RB_OK)
-            st =
-                make_buffer(gpu, (VkDeviceSize)pose->joint_matrix_count * 64,
-                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "joints", &slot->joints, err);
+            st = rb_frame_buffer(gpu, (VkDeviceSize)pose->joint_matrix_count * 64,
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "joints", &slot->joints,
+                                 err);
         if (st == RB_OK)
-            st = make_buffer(gpu, (VkDeviceSize)pose->morph_weight_count * sizeof(float),
-                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "weights", &slot->weights,
-                             err);
+            st = rb_frame_buffer(gpu, (VkDeviceSize)pose->morph_weight_count * sizeof(float),
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "weights",
+                                 &slot->weights, err);
         if (st == RB_OK)
-            st = make_buffer(gpu, vcount * sizeof(struct rb_gpu_vertex),
-                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                             false, "vertices.world", &slot->vertices, err);
+            st = rb_frame_buffer(gpu, vcount * sizeof(struct rb_gpu_vertex),
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+                                     VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                 false, "vertices.world", &slot->vertices, err);
     }
     return st;
 }
@@ -395,9 +396,9 @@ out:
     return st;
 }
 
-static enum rb_status make_image(struct rb_gpu *gpu, uint32_t w, uint32_t h, uint32_t layers,
-                                 VkFormat format, VkImageUsageFlags usage, bool layer_views,
-                                 const char *name, struct rb_gpu_image *out, struct rb_err *err)
+enum rb_status rb_frame_image(struct rb_gpu *gpu, uint32_t w, uint32_t h, uint32_t layers,
+                              VkFormat format, VkImageUsageFlags usage, bool layer_views,
+                              const char *name, struct rb_gpu_image *out, struct rb_err *err)
 {
     return rb_gpu_image_init(gpu,
                              &(struct rb_gpu_image_desc){.width_px = w,
@@ -418,15 +419,15 @@ static enum rb_status upload_env(struct rb_gpu *gpu, const struct rb_integrator_
     const float *px = desc->env_rgba ? desc->env_rgba : black;
     uint32_t w = desc->env_rgba ? desc->env_width_px : 1;
     uint32_t h = desc->env_rgba ? desc->env_height_px : 1;
-    enum rb_status st = make_image(gpu, w, h, 1, VK_FORMAT_R32G32B32A32_SFLOAT,
-                                   VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                                   false, "environment", &frame->env_map, err);
+    enum rb_status st = rb_frame_image(gpu, w, h, 1, VK_FORMAT_R32G32B32A32_SFLOAT,
+                                       VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                       false, "environment", &frame->env_map, err);
     if (st)
         return st;
     struct rb_gpu_buffer staging = {0};
     VkDeviceSize bytes = (VkDeviceSize)w * h * 16;
-    st = make_buffer(gpu, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "environment staging",
-                     &staging, err);
+    st = rb_frame_buffer(gpu, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "environment staging",
+                         &staging, err);
     if (st)
         return st;
     memcpy(staging.mapped, px, bytes);
@@ -523,8 +524,8 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
 
     enum rb_status st = check_limits(gpu, scene, first->pose, w, h, frame->readback_floats, err);
     if (st == RB_OK)
-        st = make_buffer(gpu, sizeof(struct rb_gpu_globals), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
-                         true, "globals", &frame->globals, err);
+        st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_globals), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                             true, "globals", &frame->globals, err);
     if (st == RB_OK)
         st = upload_geometry(gpu, scene, first->pose, frame, err);
     if (st == RB_OK)
@@ -552,43 +553,43 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
         frame->shadow_layer_count += need;
     }
     uint32_t shadow_size = job->integrator.direct.shadow_size_px;
-    st = make_buffer(gpu, sizeof(struct rb_gpu_light) * RB_MAX_LIGHTS,
-                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "lights", &frame->lights, err);
+    st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_light) * RB_MAX_LIGHTS,
+                         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "lights", &frame->lights, err);
     if (st == RB_OK)
-        st = make_buffer(gpu, sizeof(struct rb_gpu_shadow_view) * RB_MAX_SHADOW_LAYERS,
-                         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "shadow views",
-                         &frame->shadow_views, err);
+        st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_shadow_view) * RB_MAX_SHADOW_LAYERS,
+                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "shadow views",
+                             &frame->shadow_views, err);
     if (st == RB_OK)
-        st = make_image(gpu, shadow_size, shadow_size,
-                        frame->shadow_layer_count ? frame->shadow_layer_count : 1,
-                        VK_FORMAT_R32_SFLOAT,
-                        VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, true,
-                        "shadow maps", &frame->shadow_maps, err);
+        st = rb_frame_image(gpu, shadow_size, shadow_size,
+                            frame->shadow_layer_count ? frame->shadow_layer_count : 1,
+                            VK_FORMAT_R32_SFLOAT,
+                            VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, true,
+                            "shadow maps", &frame->shadow_maps, err);
     if (st == RB_OK)
-        st = make_image(gpu, shadow_size, shadow_size, 1, VK_FORMAT_D32_SFLOAT,
-                        VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "shadow depth",
-                        &frame->shadow_depth, err);
+        st = rb_frame_image(gpu, shadow_size, shadow_size, 1, VK_FORMAT_D32_SFLOAT,
+                            VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "shadow depth",
+                            &frame->shadow_depth, err);
 
     static const char *const gb_names[RB_GBUFFER_COLOR_COUNT] = {
         "gbuffer.position", "gbuffer.normal",   "gbuffer.albedo",
         "gbuffer.specular", "gbuffer.emission", "gbuffer.motion"};
     for (int i = 0; i < RB_GBUFFER_COLOR_COUNT && st == RB_OK; i++)
-        st = make_image(gpu, w, h, 1, rb_gbuffer_formats[i],
-                        VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
-                            VK_IMAGE_USAGE_SAMPLED_BIT,
-                        false, gb_names[i], &frame->gbuffer[i], err);
+        st = rb_frame_image(gpu, w, h, 1, rb_gbuffer_formats[i],
+                            VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
+                                VK_IMAGE_USAGE_SAMPLED_BIT,
+                            false, gb_names[i], &frame->gbuffer[i], err);
     if (st == RB_OK)
-        st = make_image(gpu, w, h, 1, VK_FORMAT_D32_SFLOAT,
-                        VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "gbuffer.depth",
-                        &frame->depth, err);
+        st = rb_frame_image(gpu, w, h, 1, VK_FORMAT_D32_SFLOAT,
+                            VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "gbuffer.depth",
+                            &frame->depth, err);
     if (st == RB_OK)
-        st = make_image(gpu, w, h, 1, VK_FORMAT_R32G32B32A32_SFLOAT,
-                        VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, false, "direct",
-                        &frame->direct, err);
+        st = rb_frame_image(gpu, w, h, 1, VK_FORMAT_R32G32B32A32_SFLOAT,
+                            VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, false,
+                            "direct", &frame->direct, err);
     if (st == RB_OK)
-        st = make_buffer(gpu, (VkDeviceSize)w * h * frame->readback_floats * sizeof(float),
-                         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                         true, "readback", &frame->readback, err);
+        st = rb_frame_buffer(gpu, (VkDeviceSize)w * h * frame->readback_floats * sizeof(float),
+                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                             true, "readback", &frame->readback, err);
     if (st)
         return st;
     frame->beauty = &frame->direct;

@@ -136,4 +136,13 @@ void rb_base_record_output(struct rb_integrator *it, struct rb_base *b, VkComman
  * integrator. Valid until rb_integrator_destroy. */
 const struct rb_bdpt_frame *rb_integrator_bdpt_frame(const struct rb_integrator *it);
 
+/* A device buffer (size 0 is made 16 bytes) and an image (is_array for several layers or
+ * layer_views; has_layer_views for layer_views), as the frame's own resources are made. */
+enum rb_status rb_frame_buffer(struct rb_gpu *gpu, VkDeviceSize size, VkBufferUsageFlags usage,
+                               bool host, const char *name, struct rb_gpu_buffer *out,
+                               struct rb_err *err);
+enum rb_status rb_frame_image(struct rb_gpu *gpu, uint32_t w, uint32_t h, uint32_t layers,
+                              VkFormat format, VkImageUsageFlags usage, bool layer_views,
+                              const char *name, struct rb_gpu_image *out, struct rb_err *err);
+
 #endif
