@@ -87,7 +87,12 @@ enum rb_status rb_render_create(const struct rb_render_desc *desc, struct rb_ren
     r->is_timing_only = desc->is_timing_only;
     snprintf(r->hash, sizeof(r->hash), "%016llx", (unsigned long long)desc->setup->job_hash);
     enum rb_status st = RB_OK;
-    r->scratch = malloc((size_t)job->width_px * job->height_px * RB_OUT_FLOATS * sizeof(float));
+    /* A frame's floats a pixel: the GPU reads back the job's layers, the reference makes all. */
+    size_t frame_floats =
+        (size_t)job->width_px * job->height_px *
+        rb_layer_stride(job->integrator.name == RB_INTEGRATOR_REFERENCE ? RB_LAYERS_ALL
+                                                                        : job->layer_mask);
+    r->scratch = malloc(frame_floats * sizeof(float));
     if (!r->scratch) {
         st = rb_errf(err, RB_E_NOMEM, "out of memory for a %ux%u frame", job->width_px,
                      job->height_px);
@@ -129,8 +134,7 @@ enum rb_status rb_render_create(const struct rb_render_desc *desc, struct rb_ren
     if (st)
         goto fail;
     for (int q = 0; q < QUEUE_DEPTH; q++)
-        if (!(r->queue[q].pixels =
-                  malloc((size_t)job->width_px * job->height_px * RB_OUT_FLOATS * sizeof(float)))) {
+        if (!(r->queue[q].pixels = malloc(frame_floats * sizeof(float)))) {
             st = rb_errf(err, RB_E_NOMEM, "out of memory for the frames waiting to be written");
             goto fail;
         }
