@@ -1,7 +1,8 @@
 // output: packs the frame's layers into one buffer for a single readback: the beauty (RGBA),
-// then the layers the job writes, in the order direct, indirect, albedo, normal, depth, motion
-// (with all of them, the RB_OUT_* layout). The direct integrator has no indirect light: zero;
-// bdpt's is textured and added here. Every value written that is NaN or infinite is counted
+// then the layers the job writes, in the order direct, indirect, albedo, normal, depth, motion,
+// indirect_diffuse, indirect_specular (with all of them, the RB_OUT_* layout). The direct
+// integrator has no indirect light: zero; bdpt's is textured and added here, its two parts
+// summed exactly into indirect. Every value written that is NaN or infinite is counted
 // in `nonfinite` (an integer atomic add, so the count does not depend on the order).
 #version 460
 #extension GL_GOOGLE_include_directive : require
@@ -74,12 +75,15 @@ void main()
     vec3 a = hit ? imageLoad(gb_albedo, ip).rgb : vec3(0.0);
     vec3 n = hit ? imageLoad(gb_normal, ip).xyz : vec3(0.0);
     vec2 m = hit ? imageLoad(gb_motion, ip).xy : vec2(0.0);
-    vec3 ind = vec3(0.0);
+    // precise: no product is fused into the sum, so ind is exactly ind_d + ind_s as written.
+    precise vec3 ind_d = vec3(0.0), ind_s = vec3(0.0), ind = vec3(0.0);
     if (band.has_light != 0u && hit) {
         // Texturing (seed 000, Figure 3 b): the light was gathered without the maps.
         float s = rb_spec_map(imageLoad(gb_specular, ip).rgb);
         vec3 more = a * imageLoad(direct_diffuse, ip).rgb + s * imageLoad(direct_specular, ip).rgb;
-        ind = a * imageLoad(indirect_diffuse, ip).rgb + s * imageLoad(indirect_specular, ip).rgb;
+        ind_d = a * imageLoad(indirect_diffuse, ip).rgb;
+        ind_s = s * imageLoad(indirect_specular, ip).rgb;
+        ind = ind_d + ind_s;
         d += more;
         b.rgb += more + ind;
     }
@@ -95,6 +99,8 @@ void main()
     layer(RB_LAYER_NORMAL, n, 3u, at);
     layer(RB_LAYER_DEPTH, vec3(hit ? pos.w : 0.0, 0.0, 0.0), 1u, at);
     layer(RB_LAYER_MOTION, vec3(m, 0.0), 2u, at);
+    layer(RB_LAYER_INDIRECT_DIFFUSE, ind_d, 3u, at);
+    layer(RB_LAYER_INDIRECT_SPECULAR, ind_s, 3u, at);
     for (; at < base + band.floats_per_pixel; at++)
         put(at, 0.0); // padding to 16 bytes a pixel
     if (bad > 0u)

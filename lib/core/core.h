@@ -214,12 +214,16 @@ enum rb_layer {
     RB_LAYER_NORMAL,     /* XYZ */
     RB_LAYER_DEPTH,      /* Z */
     RB_LAYER_MOTION,     /* XY */
+    /* indirect's two parts, textured by the diffuse and specular maps: indirect exactly. Last,
+     * so that the bits (and job hashes) of the layers before them stay as they were. */
+    RB_LAYER_INDIRECT_DIFFUSE,  /* RGB */
+    RB_LAYER_INDIRECT_SPECULAR, /* RGB */
     RB_LAYER_COUNT,
 };
 #define RB_LAYERS_ALL ((1u << RB_LAYER_COUNT) - 1u)
 /* The packed pixel of a layer mask: the beauty's 4 floats, then each layer in the mask, in
  * order, the whole rounded up to a multiple of 4 floats (16 bytes). With every layer this is
- * the RB_OUT_* layout of shaders/common/shared.h (20 floats). */
+ * the RB_OUT_* layout of shaders/common/shared.h (28 floats). */
 uint32_t rb_layer_width(enum rb_layer layer);
 uint32_t rb_layer_offset(uint32_t mask, enum rb_layer layer); /* in floats; for a layer in mask */
 uint32_t rb_layer_stride(uint32_t mask);                      /* floats per pixel */

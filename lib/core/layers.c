@@ -4,7 +4,7 @@
 
 uint32_t rb_layer_width(enum rb_layer layer)
 {
-    static const uint32_t width[RB_LAYER_COUNT] = {3, 3, 3, 3, 1, 2};
+    static const uint32_t width[RB_LAYER_COUNT] = {3, 3, 3, 3, 1, 2, 3, 3};
     return (uint32_t)layer < RB_LAYER_COUNT ? width[layer] : 0;
 }
 
@@ -24,7 +24,8 @@ uint32_t rb_layer_stride(uint32_t mask)
 
 const char *rb_layer_name(enum rb_layer layer)
 {
-    static const char *const names[RB_LAYER_COUNT] = {"direct", "indirect", "albedo",
-                                                      "normal", "depth",    "motion"};
+    static const char *const names[RB_LAYER_COUNT] = {
+        "direct", "indirect", "albedo",           "normal",
+        "depth",  "motion",   "indirect_diffuse", "indirect_specular"};
     return (uint32_t)layer < RB_LAYER_COUNT ? names[layer] : NULL;
 }

@@ -107,7 +107,7 @@ static const struct key keys[] = {
     K("layers", KT_STRLIST, JOB(layers), NOLO, NOHI,
       "[direct, indirect, albedo, normal, depth, motion]", 0,
       "the EXR's layers beside the beauty (RGBA): direct, indirect, albedo, normal, depth, "
-      "motion; only these are read back from the device",
+      "motion, indirect_diffuse, indirect_specular; only these are read back from the device",
       .count_offset = JOB(layer_count)),
     K("frames.start", KT_INT, JOB(frame_start), 0, NOHI, "0", 0, "first frame to render"),
     K("frames.end", KT_INT, JOB(frame_end), -1, NOHI, "-1", 0,
@@ -1097,10 +1097,14 @@ static enum rb_status validate(struct ctx *c)
         uint32_t l = 0;
         while (l < RB_LAYER_COUNT && strcmp(job->layers[i], rb_layer_name((enum rb_layer)l)))
             l++;
-        if (l == RB_LAYER_COUNT)
+        if (l == RB_LAYER_COUNT) {
+            char known[256] = "";
+            for (l = 0; l < RB_LAYER_COUNT; l++)
+                snprintf(known + strlen(known), sizeof(known) - strlen(known), "%s%s",
+                         l ? ", " : "", rb_layer_name((enum rb_layer)l));
             return fail(c, mark_of(m, "layers", NULL, &c->root), RB_E_INVALID,
-                        "unknown layer '%s' (direct, indirect, albedo, normal, depth, motion)",
-                        job->layers[i]);
+                        "unknown layer '%s' (%s)", job->layers[i], known);
+        }
         job->layer_mask |= 1u << l;
     }
     struct rb_err why = RB_ERR_INIT;

@@ -166,15 +166,23 @@ float rb_ref_bsdf_pdf(const struct rb_ref_bsdf *b, const float l[3])
     return b->p_spec * ps + (1.0f - b->p_spec) * pd;
 }
 
+static void clear_weights(float weight[3], float lobe_weight[RB_REF_LOBE_COUNT][3])
+{
+    for (int i = 0; i < 3; i++)
+        weight[i] = lobe_weight[RB_REF_LOBE_DIFFUSE][i] = lobe_weight[RB_REF_LOBE_SPECULAR][i] =
+            0.0f;
+}
+
 /* f cos / pdf for a sampled l, and the pdf, with GGX's D divided out of both. Near a mirror
  * (alpha down at 1e-4) single precision cannot evaluate D = a2 / (pi d^2) at the peak (d loses
  * every digit, down to 0), but it scales the specular value and the specular pdf alike, so
  * their ratio, F V cos 4 (n.v) / G1 for a metal, stays exact. */
-static float sample_weight(const struct rb_ref_bsdf *b, const float l[3], float weight[3])
+static float sample_weight(const struct rb_ref_bsdf *b, const float l[3], float weight[3],
+                           float lobe_weight[RB_REF_LOBE_COUNT][3])
 {
     const struct rb_ref_surface *s = b->s;
     struct brdf_terms t;
-    weight[0] = weight[1] = weight[2] = 0.0f;
+    clear_weights(weight, lobe_weight);
     if (rb_ref_dot(s->ng, l) <= 0.0f || !brdf_terms(s->n, b->v, l, s->roughness, &t))
         return rb_ref_bsdf_pdf(b, l);
     float cos = t.ndl;
@@ -189,6 +197,8 @@ static float sample_weight(const struct rb_ref_bsdf *b, const float l[3], float 
             float F = s->f0[i] + (s->f90 - s->f0[i]) * t.fw;
             float fd = (1.0f - F) * s->c_diff[i] / RB_PI;
             weight[i] = (F * t.V * cos + fd * cos * inv_d) / den;
+            lobe_weight[RB_REF_LOBE_SPECULAR][i] = F * t.V * cos / den;
+            lobe_weight[RB_REF_LOBE_DIFFUSE][i] = fd * cos * inv_d / den;
         }
         return inv_d > 0.0f ? den / inv_d : INFINITY;
     }
@@ -196,12 +206,12 @@ static float sample_weight(const struct rb_ref_bsdf *b, const float l[3], float 
     if (!(diff_pdf > 0.0f))
         return 0.0f;
     for (int i = 0; i < 3; i++)
-        weight[i] = s->c_diff[i] / RB_PI * cos / diff_pdf;
+        weight[i] = lobe_weight[RB_REF_LOBE_DIFFUSE][i] = s->c_diff[i] / RB_PI * cos / diff_pdf;
     return diff_pdf;
 }
 
 float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, float u1, float l[3],
-                         float weight[3])
+                         float weight[3], float lobe_weight[RB_REF_LOBE_COUNT][3])
 {
     float ll[3];
     if (u_lobe < b->p_spec) {
@@ -232,7 +242,7 @@ float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, fl
         float ne[3] = {a * nh[0], a * nh[1], rb_ref_maxf(nh[2], 0.0f)};
         float nl = sqrtf(rb_ref_dot(ne, ne));
         if (!(nl > 0.0f)) {
-            weight[0] = weight[1] = weight[2] = 0.0f;
+            clear_weights(weight, lobe_weight);
             return 0.0f;
         }
         for (int i = 0; i < 3; i++)
@@ -250,11 +260,11 @@ float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, fl
     to_world(b, ll, l);
     float len = sqrtf(rb_ref_dot(l, l));
     if (!(len > 0.0f)) {
-        weight[0] = weight[1] = weight[2] = 0.0f;
+        clear_weights(weight, lobe_weight);
         return 0.0f;
     }
     l[0] /= len;
     l[1] /= len;
     l[2] /= len;
-    return sample_weight(b, l, weight);
+    return sample_weight(b, l, weight, lobe_weight);
 }

@@ -33,9 +33,11 @@
  *   samples, MIS) and on camera misses. With a black environment it is FULL with two bounces.
  * - Layers: direct = emission at x1 + light reaching x1 after exactly one scattering + the
  *   environment on camera misses; indirect = the rest; beauty = direct + indirect, alpha 1 on a
- *   hit and 0 on a miss (averaged under box). AOVs from the first hit: albedo (c_diff), shading
- *   normal, view depth, motion (previous minus current pixel position of the same surface
- *   point).
+ *   hit and 0 on a miss (averaged under box). indirect_diffuse and indirect_specular: indirect
+ *   through x1's diffuse or specular lobe alone (x1's BSDF weight split by lobe), summed apart,
+ *   so they add up to indirect up to rounding. AOVs from the first hit: albedo (c_diff),
+ *   shading normal, view depth, motion (previous minus current pixel position of the same
+ *   surface point).
  * Samples (sample.c): a pixel's samples are Owen-scrambled Sobol (0,2)-sequences in pairs of
  * dimensions (the pixel position, each vertex's BSDF direction, emitter point, environment
  * direction), padded with independent seeds per frame, pixel and pair; the error falls faster
@@ -60,7 +62,9 @@
 #define MAX_CLIPS 64
 #define MAX_THREADS 256
 #define MAX_PASS_SPP 16
-#define ACCUM 7 /* doubles per pixel: direct RGB, indirect RGB, samples that hit (box) */
+/* doubles per pixel: direct RGB, indirect RGB, samples that hit (box), then indirect by the
+ * lobe of x1 that reflects it: diffuse RGB, specular RGB */
+#define ACCUM 13
 
 struct rb_reference {
     const struct rb_job *job;
@@ -613,7 +617,7 @@ static void trace_pixel(struct rb_reference *ref, const struct rb_mat4 *inv_vp, 
     for (uint32_t s = s0; s < s1; s++) {
         struct rb_ref_rng rng;
         rb_ref_rng_init(&rng, w->is_hashed_sampler, w->frame, (uint32_t)i, s);
-        float direct[3] = {0, 0, 0}, indirect[3] = {0, 0, 0};
+        struct rb_ref_sample_light light = {0};
         if (ref->use_box_filter) {
             float u[2], dir[3];
             rb_ref_rand2(&rng, RB_REF_DIM_PIXEL, u);
@@ -621,18 +625,20 @@ static void trace_pixel(struct rb_reference *ref, const struct rb_mat4 *inv_vp, 
             struct rb_ref_hit h;
             camera_hit(ref, dir, &h, rays);
             if (h.prim == RB_REF_NONE) {
-                rb_ref_env_eval(&ref->env, dir, direct);
+                rb_ref_env_eval(&ref->env, dir, light.direct);
             } else {
-                rb_ref_trace_sample(w, &h, dir, &rng, direct, indirect, rays);
+                rb_ref_trace_sample(w, &h, dir, &rng, &light, rays);
                 acc[6] += 1.0;
             }
         } else {
-            rb_ref_trace_sample(w, hit, ref->primary_dir + i * 3, &rng, direct, indirect, rays);
+            rb_ref_trace_sample(w, hit, ref->primary_dir + i * 3, &rng, &light, rays);
             acc[6] += 1.0;
         }
         for (int c = 0; c < 3; c++) {
-            acc[c] += direct[c];
-            acc[3 + c] += indirect[c];
+            acc[c] += light.direct[c];
+            acc[3 + c] += light.indirect[c];
+            acc[7 + c] += light.indirect_lobe[RB_REF_LOBE_DIFFUSE][c];
+            acc[10 + c] += light.indirect_lobe[RB_REF_LOBE_SPECULAR][c];
         }
     }
 }
@@ -736,6 +742,8 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct r
             o[RB_OUT_BEAUTY + c] = (float)(d + ind);
             o[RB_OUT_DIRECT + c] = (float)d;
             o[RB_OUT_INDIRECT + c] = (float)ind;
+            o[RB_OUT_INDIRECT_DIFFUSE + c] = (float)(acc[7 + c] * inv);
+            o[RB_OUT_INDIRECT_SPECULAR + c] = (float)(acc[10 + c] * inv);
         }
         /* box: the fraction of the pixel's samples that hit a surface */
         o[RB_OUT_BEAUTY + 3] = ref->use_box_filter ? (float)(acc[6] / (double)done) : 1.0f;

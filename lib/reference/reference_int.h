@@ -192,10 +192,13 @@ void rb_ref_bsdf_init(struct rb_ref_bsdf *b, const struct rb_ref_surface *s, con
 void rb_ref_bsdf_eval(const struct rb_ref_bsdf *b, const float l[3], float out[3]);
 /* The combined pdf (solid angle) of both lobes for l. */
 float rb_ref_bsdf_pdf(const struct rb_ref_bsdf *b, const float l[3]);
+/* The BRDF's two lobes: (1 - F) c_diff / pi and F D V. */
+enum rb_ref_lobe { RB_REF_LOBE_DIFFUSE = 0, RB_REF_LOBE_SPECULAR, RB_REF_LOBE_COUNT };
 /* Samples l; returns its combined pdf (0 when nothing could be sampled; infinite for a mirror
- * direction single precision cannot resolve) and writes weight = BSDF value / pdf. */
+ * direction single precision cannot resolve) and writes weight = BSDF value / pdf, and each
+ * lobe's value over the same pdf in lobe_weight (their sum is weight up to rounding). */
 float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, float u1, float l[3],
-                         float weight[3]);
+                         float weight[3], float lobe_weight[RB_REF_LOBE_COUNT][3]);
 
 /* ---- the integrator (trace.c) --------------------------------------------------------------- */
 
@@ -204,11 +207,18 @@ float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, fl
 #define RB_REF_DIM_PIXEL 0
 #define RB_REF_DIM_CAMERA_END 16
 
-/* One sample of one pixel whose camera ray (direction dir) hit hit: adds the light of the
- * direct and indirect layers to direct and indirect (zeroed by the caller). */
+/* One sample's light, by layer: direct, indirect, and indirect again split by the lobe of x1
+ * that reflects it toward the camera (the indirect_diffuse and indirect_specular layers). */
+struct rb_ref_sample_light {
+    float direct[3], indirect[3];
+    float indirect_lobe[RB_REF_LOBE_COUNT][3];
+};
+
+/* One sample of one pixel whose camera ray (direction dir) hit hit: adds its light to out
+ * (zeroed by the caller). */
 void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
-                         const float dir[3], const struct rb_ref_rng *rng, float direct[3],
-                         float indirect[3], uint64_t *rays);
+                         const float dir[3], const struct rb_ref_rng *rng,
+                         struct rb_ref_sample_light *out, uint64_t *rays);
 
 /* ---- small vector helpers ------------------------------------------------------------------- */
 

@@ -56,19 +56,30 @@ static bool is_black(const float c[3])
     return !(c[0] > 0.0f || c[1] > 0.0f || c[2] > 0.0f) || !(c[0] + c[1] + c[2] < INFINITY);
 }
 
-static void add_scaled(float acc[3], const float beta[3], const float a[3], const float b[3],
-                       float s)
+/* Where a vertex's light goes: acc gains beta x the light; past x1, each lobe's acc gains the
+ * same light through that lobe of x1 alone (its beta starts from x1's weight for that lobe). */
+struct sink {
+    const float *beta;
+    float *acc;
+    bool has_lobes;
+    float (*lobe_beta)[3], (*lobe_acc)[3];
+};
+
+static void add_scaled(const struct sink *sk, const float a[3], const float b[3], float s)
 {
     for (int i = 0; i < 3; i++)
-        acc[i] += beta[i] * a[i] * b[i] * s;
+        sk->acc[i] += sk->beta[i] * a[i] * b[i] * s;
+    for (int j = 0; sk->has_lobes && j < RB_REF_LOBE_COUNT; j++)
+        for (int i = 0; i < 3; i++)
+            sk->lobe_acc[j][i] += sk->lobe_beta[j][i] * a[i] * b[i] * s;
 }
 
 /* Every punctual light, as shaders/direct.comp lights a G-buffer pixel, with a shadow ray in
  * place of the shadow map. */
 static void nee_punctual(const struct rb_ref_world *w, const struct rb_ref_surface *s,
-                         const struct rb_ref_bsdf *b, const float beta[3], float acc[3],
-                         uint64_t *rays)
+                         const struct rb_ref_bsdf *b, const struct sink *sk, uint64_t *rays)
 {
+    static const float one[3] = {1.0f, 1.0f, 1.0f};
     for (uint32_t i = 0; i < w->light_count; i++) {
         const struct rb_ref_light *L = &w->lights[i];
         float l[3], dist, atten;
@@ -98,8 +109,8 @@ static void nee_punctual(const struct rb_ref_world *w, const struct rb_ref_surfa
         float f[3];
         rb_reference_brdf(s->n, b->v, l, s->c_diff, s->f0, s->f90, s->roughness, f);
         float c[3];
-        for (int k = 0; k < 3; k++)
-            c[k] = f[k] * L->color[k] * atten * ndl;
+        for (int j = 0; j < 3; j++)
+            c[j] = f[j] * L->color[j] * atten * ndl;
         if (is_black(c))
             continue;
         /* Shaded at the surface point, as direct.comp does; the shadow ray leaves from off the
@@ -115,8 +126,7 @@ static void nee_punctual(const struct rb_ref_world *w, const struct rb_ref_surfa
         }
         if (is_blocked)
             continue;
-        for (int k = 0; k < 3; k++)
-            acc[k] += beta[k] * c[k];
+        add_scaled(sk, c, one, 1.0f); /* exact: beta x c */
     }
 }
 
@@ -160,7 +170,7 @@ static float face_cos(const struct rb_ref_world *w, uint32_t prim, const float l
  * distance and pdf are measured from the shadow ray's origin off the surface, as the BSDF
  * samples' hits are (their distance is from the same origin), so the two MIS weights agree. */
 static void nee_area(const struct rb_ref_world *w, const struct rb_ref_surface *s,
-                     const struct rb_ref_bsdf *b, const float beta[3], float acc[3],
+                     const struct rb_ref_bsdf *b, const struct sink *sk,
                      const struct rb_ref_rng *rng, uint32_t dim, uint64_t *rays)
 {
     uint32_t prim = pick_emitter(w, rb_ref_rand(rng, dim + DIM_EMIT_PICK));
@@ -201,13 +211,13 @@ static void nee_area(const struct rb_ref_world *w, const struct rb_ref_surface *
     rb_ref_offset(q, ne, q_off);
     if (occluded_toward(w, org, q_off, rays))
         return;
-    add_scaled(acc, beta, f, le, power_heuristic(pdf, rb_ref_bsdf_pdf(b, l)) / pdf);
+    add_scaled(sk, f, le, power_heuristic(pdf, rb_ref_bsdf_pdf(b, l)) / pdf);
 }
 
 /* The environment is at infinity: a shadow ray along l from anywhere near the surface aims at
  * the same light. */
 static void nee_env(const struct rb_ref_world *w, const struct rb_ref_surface *s,
-                    const struct rb_ref_bsdf *b, const float beta[3], float acc[3],
+                    const struct rb_ref_bsdf *b, const struct sink *sk,
                     const struct rb_ref_rng *rng, uint32_t dim, uint64_t *rays)
 {
     float l[3], u[2];
@@ -227,17 +237,17 @@ static void nee_env(const struct rb_ref_world *w, const struct rb_ref_surface *s
     (*rays)++;
     if (rb_ref_occluded(w, org, l, INFINITY))
         return;
-    add_scaled(acc, beta, f, le, power_heuristic(pdf, rb_ref_bsdf_pdf(b, l)) / pdf);
+    add_scaled(sk, f, le, power_heuristic(pdf, rb_ref_bsdf_pdf(b, l)) / pdf);
 }
 
 void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
-                         const float dir0[3], const struct rb_ref_rng *rng, float direct[3],
-                         float indirect[3], uint64_t *rays)
+                         const float dir0[3], const struct rb_ref_rng *rng,
+                         struct rb_ref_sample_light *out, uint64_t *rays)
 {
     struct rb_ref_surface s;
     rb_ref_surface_eval(w, hit->prim, hit->u, hit->v, dir0, &s);
     for (int i = 0; i < 3; i++)
-        direct[i] += s.emission[i];
+        out->direct[i] += s.emission[i];
 
     /* How many bounces past x1 the path may take, and what each vertex may gather. Emitters
      * light as punctual lights do, at every vertex up to the last one, by light sample and by
@@ -252,8 +262,13 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
         bounces = 2;
 
     float beta[3] = {1.0f, 1.0f, 1.0f}, dir[3] = {dir0[0], dir0[1], dir0[2]};
+    float lobe_beta[RB_REF_LOBE_COUNT][3] = {{0}};
     for (uint32_t k = 1;; k++) {
-        float *acc = k == 1 ? direct : indirect;
+        struct sink sk = {.beta = beta,
+                          .acc = k == 1 ? out->direct : out->indirect,
+                          .has_lobes = k > 1,
+                          .lobe_beta = lobe_beta,
+                          .lobe_acc = out->indirect_lobe};
         bool do_area = has_area;
         bool do_env = has_env && (w->paths == RB_PATHS_FULL || k == 1);
         bool do_continue = k <= bounces;
@@ -262,19 +277,20 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
         struct rb_ref_bsdf b;
         rb_ref_bsdf_init(&b, &s, v);
 
-        nee_punctual(w, &s, &b, beta, acc, rays);
+        nee_punctual(w, &s, &b, &sk, rays);
         if (do_area)
-            nee_area(w, &s, &b, beta, acc, rng, dim, rays);
+            nee_area(w, &s, &b, &sk, rng, dim, rays);
         if (do_env)
-            nee_env(w, &s, &b, beta, acc, rng, dim, rays);
+            nee_env(w, &s, &b, &sk, rng, dim, rays);
         if (!do_continue && !do_area && !do_env)
             break;
 
         /* The BSDF sample: it finds emitters and the environment (MIS'd against the light
          * samples above) and, where allowed, the next vertex. */
-        float l[3], weight[3], u[2];
+        float l[3], weight[3], lobe_weight[RB_REF_LOBE_COUNT][3], u[2];
         rb_ref_rand2(rng, dim + DIM_DIR, u);
-        float pdf = rb_ref_bsdf_sample(&b, rb_ref_rand(rng, dim + DIM_LOBE), u[0], u[1], l, weight);
+        float pdf = rb_ref_bsdf_sample(&b, rb_ref_rand(rng, dim + DIM_LOBE), u[0], u[1], l, weight,
+                                       lobe_weight);
         if (!(pdf > 0.0f) || is_black(weight))
             break;
         float org[3];
@@ -287,7 +303,7 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
                 float le[3];
                 rb_ref_env_eval(w->env, l, le);
                 float mis = power_heuristic(pdf, rb_ref_env_pdf(w->env, s.n, l));
-                add_scaled(acc, beta, weight, le, mis);
+                add_scaled(&sk, weight, le, mis);
             }
             break;
         }
@@ -299,18 +315,24 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
             float cos_l = face_cos(w, h.prim, l);
             float pdf_light =
                 cos_l > 0.0f ? w->emit_pdf_area[h.prim] * h.t * h.t / cos_l : INFINITY;
-            add_scaled(acc, beta, weight, next.emission, power_heuristic(pdf, pdf_light));
+            add_scaled(&sk, weight, next.emission, power_heuristic(pdf, pdf_light));
         }
         if (!do_continue)
             break;
-        for (int i = 0; i < 3; i++)
+        for (int i = 0; i < 3; i++) {
             beta[i] *= weight[i];
+            for (int j = 0; j < RB_REF_LOBE_COUNT; j++) /* x1's own lobe, then the path's */
+                lobe_beta[j][i] = k == 1 ? lobe_weight[j][i] : lobe_beta[j][i] * weight[i];
+        }
         if (k > w->rr_depth) {
             float q = rb_clampf(rb_ref_maxf(beta[0], rb_ref_maxf(beta[1], beta[2])), 0.05f, 0.95f);
             if (rb_ref_rand(rng, dim + DIM_RR) >= q)
                 break;
-            for (int i = 0; i < 3; i++)
+            for (int i = 0; i < 3; i++) {
                 beta[i] /= q;
+                for (int j = 0; j < RB_REF_LOBE_COUNT; j++)
+                    lobe_beta[j][i] /= q;
+            }
         }
         s = next;
         dir[0] = l[0];

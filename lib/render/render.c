@@ -230,7 +230,8 @@ static enum rb_status write_exr(const struct rb_render *r, const char *path,
     static const char *const rgb[] = {"R", "G", "B"};
     static const char *const xyz[] = {"X", "Y", "Z"};
     static const char *const z[] = {"Z"};
-    static const char *const *const channels[RB_LAYER_COUNT] = {rgb, rgb, rgb, xyz, z, xyz};
+    static const char *const *const channels[RB_LAYER_COUNT] = {rgb, rgb, rgb, xyz,
+                                                                z,   xyz, rgb, rgb};
     struct rb_io_layer out[1 + RB_LAYER_COUNT];
     uint32_t offset[1 + RB_LAYER_COUNT], layer_count = 0;
     out[layer_count] = (struct rb_io_layer){.channel_count = 4, .channel_names = rgba};

@@ -88,6 +88,8 @@ struct rb_gpu_shadow_view {
 #define RB_LAYER_NORMAL 3u
 #define RB_LAYER_DEPTH 4u
 #define RB_LAYER_MOTION 5u
+#define RB_LAYER_INDIRECT_DIFFUSE 6u
+#define RB_LAYER_INDIRECT_SPECULAR 7u
 #endif
 
 /* A frame's result with every layer: these floats per pixel, in this order (the reference's
@@ -99,6 +101,8 @@ struct rb_gpu_shadow_view {
 #define RB_OUT_NORMAL 13   /* XYZ */
 #define RB_OUT_DEPTH 16    /* Z */
 #define RB_OUT_MOTION 17   /* XY */
-#define RB_OUT_FLOATS 20   /* the last one is padding */
+#define RB_OUT_INDIRECT_DIFFUSE 19  /* RGB */
+#define RB_OUT_INDIRECT_SPECULAR 22 /* RGB */
+#define RB_OUT_FLOATS 28            /* the last three are padding */
 
 #endif

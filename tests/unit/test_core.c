@@ -133,8 +133,9 @@ static void test_log(void **state)
 static void test_layers(void **state)
 {
     (void)state;
-    static const uint32_t out[RB_LAYER_COUNT] = {RB_OUT_DIRECT, RB_OUT_INDIRECT, RB_OUT_ALBEDO,
-                                                 RB_OUT_NORMAL, RB_OUT_DEPTH,    RB_OUT_MOTION};
+    static const uint32_t out[RB_LAYER_COUNT] = {
+        RB_OUT_DIRECT, RB_OUT_INDIRECT, RB_OUT_ALBEDO,           RB_OUT_NORMAL,
+        RB_OUT_DEPTH,  RB_OUT_MOTION,   RB_OUT_INDIRECT_DIFFUSE, RB_OUT_INDIRECT_SPECULAR};
     for (uint32_t l = 0; l < RB_LAYER_COUNT; l++)
         assert_int_equal(rb_layer_offset(RB_LAYERS_ALL, (enum rb_layer)l), out[l]);
     assert_int_equal(rb_layer_stride(RB_LAYERS_ALL), RB_OUT_FLOATS);
@@ -146,6 +147,13 @@ static void test_layers(void **state)
     assert_int_equal(rb_layer_offset(dn, RB_LAYER_DEPTH), 7);
     assert_int_equal(rb_layer_stride(dn), 8);
     assert_int_equal(rb_layer_stride(0), 4);
+    /* indirect's parts come last: the layers before them keep their offsets */
+    uint32_t parts = 1u << RB_LAYER_INDIRECT_DIFFUSE | 1u << RB_LAYER_INDIRECT_SPECULAR;
+    assert_int_equal(rb_layer_offset(parts | depth, RB_LAYER_DEPTH), 4);
+    assert_int_equal(rb_layer_offset(parts | depth, RB_LAYER_INDIRECT_DIFFUSE), 5);
+    assert_int_equal(rb_layer_offset(parts | depth, RB_LAYER_INDIRECT_SPECULAR), 8);
+    assert_int_equal(rb_layer_stride(parts | depth), 12);
+    assert_string_equal(rb_layer_name(RB_LAYER_INDIRECT_SPECULAR), "indirect_specular");
     assert_string_equal(rb_layer_name(RB_LAYER_MOTION), "motion");
     assert_null(rb_layer_name(RB_LAYER_COUNT));
 }

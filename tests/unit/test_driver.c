@@ -309,7 +309,7 @@ static void test_pass_groups(void **state)
 static void test_direct_chunks(void **state)
 {
     struct fixture *f = *state;
-    size_t bytes = (size_t)32 * 18 * RB_OUT_FLOATS * sizeof(float);
+    size_t bytes = (size_t)32 * 18 * rb_layer_stride(f->job->layer_mask) * sizeof(float);
     uint8_t *whole = malloc(8 * bytes), *chunk = malloc(3 * bytes);
     assert_non_null(whole);
     assert_non_null(chunk);

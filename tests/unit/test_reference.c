@@ -753,6 +753,10 @@ static void test_emissive_furnace(void **state)
         direct += p[RB_OUT_DIRECT];
         indirect += p[RB_OUT_INDIRECT];
         assert_true(fabsf(p[RB_OUT_BEAUTY] - p[RB_OUT_DIRECT] - p[RB_OUT_INDIRECT]) < 1e-5f);
+        /* no specular lobe (specular_factor 0): the indirect light is all diffuse */
+        assert_true(p[RB_OUT_INDIRECT_SPECULAR] == 0.0f);
+        assert_true(fabsf(p[RB_OUT_INDIRECT_DIFFUSE] - p[RB_OUT_INDIRECT]) <=
+                    1e-6f * p[RB_OUT_INDIRECT]);
     }
     direct /= n;
     indirect /= n;
@@ -1650,7 +1654,7 @@ static void test_pixel_filter(void **state)
             const float *c = px_at(pc, &r, x, y), *b = px_at(pb, &r, x, y);
             /* the AOVs are the centre ray's under either filter */
             assert_memory_equal(c + RB_OUT_ALBEDO, b + RB_OUT_ALBEDO,
-                                (RB_OUT_FLOATS - RB_OUT_ALBEDO) * sizeof(float));
+                                (RB_OUT_MOTION + 2 - RB_OUT_ALBEDO) * sizeof(float));
             assert_true(c[RB_OUT_BEAUTY + 3] == 0.0f || c[RB_OUT_BEAUTY + 3] == 1.0f);
             enum { G = 64 };
             uint32_t hits = 0;
@@ -1772,6 +1776,45 @@ static void test_determinism(void **state)
     rb_reference_destroy(c);
     rb_reference_destroy(b);
     rb_reference_destroy(a);
+    rb_job_destroy(job);
+    rb_scene_destroy(s);
+}
+
+/* The indirect light split by the lobe of x1 that reflects it: the parts add up to indirect, and
+ * each lobe carries light where its surfaces have it (the metal sphere no diffuse, the
+ * dielectrics' 4% Fresnel some specular). */
+static void test_indirect_lobes(void **state)
+{
+    (void)state;
+    struct rb_scene *s = busy_scene();
+    struct rb_job *job = job_new(BUSY_JOB, 32, 24, 8);
+    struct rb_reference *ref = ref_new(job, s, 2);
+    struct rb_frame_result r;
+    float *px = render(ref, 0, &r);
+    size_t n = (size_t)r.width_px * r.height_px, metal = 0, glossy = 0;
+    for (size_t i = 0; i < n; i++) {
+        const float *p = px + i * RB_OUT_FLOATS;
+        for (int c = 0; c < 3; c++) {
+            float d = p[RB_OUT_INDIRECT_DIFFUSE + c], sp = p[RB_OUT_INDIRECT_SPECULAR + c];
+            float ind = p[RB_OUT_INDIRECT + c];
+            if (!(d >= 0.0f && sp >= 0.0f && fabsf(d + sp - ind) <= 1e-5f * ind))
+                fail_msg("pixel %zu channel %d: %g + %g, indirect %g", i, c, d, sp, ind);
+        }
+        bool is_black = p[RB_OUT_BEAUTY + 3] == 1.0f && p[RB_OUT_ALBEDO] == 0.0f &&
+                        p[RB_OUT_ALBEDO + 1] == 0.0f && p[RB_OUT_ALBEDO + 2] == 0.0f;
+        if (is_black) { /* the metal sphere (and the lamp): no diffuse lobe */
+            assert_true(p[RB_OUT_INDIRECT_DIFFUSE + 1] == 0.0f);
+            metal += p[RB_OUT_INDIRECT_SPECULAR + 1] > 0.0f;
+        } else if (p[RB_OUT_ALBEDO + 1] > 0.0f) {
+            glossy +=
+                p[RB_OUT_INDIRECT_SPECULAR + 1] > 0.0f && p[RB_OUT_INDIRECT_DIFFUSE + 1] > 0.0f;
+        }
+    }
+    if (!(metal > 10 && glossy > 10))
+        fail_msg("%zu metal pixels with specular indirect light, %zu dielectric ones with both",
+                 metal, glossy);
+    free(px);
+    rb_reference_destroy(ref);
     rb_job_destroy(job);
     rb_scene_destroy(s);
 }
@@ -2040,7 +2083,8 @@ static void test_path_spaces(void **state)
         const float *pd = direct + i * RB_OUT_FLOATS, *pb = bdpt + i * RB_OUT_FLOATS;
         assert_memory_equal(pd + RB_OUT_DIRECT, pb + RB_OUT_DIRECT, 3 * sizeof(float));
         assert_true(pd[RB_OUT_INDIRECT] == 0.0f && pd[RB_OUT_INDIRECT + 1] == 0.0f);
-        assert_memory_equal(pd + RB_OUT_ALBEDO, pb + RB_OUT_ALBEDO, 10 * sizeof(float));
+        assert_memory_equal(pd + RB_OUT_ALBEDO, pb + RB_OUT_ALBEDO,
+                            (RB_OUT_MOTION + 2 - RB_OUT_ALBEDO) * sizeof(float));
     }
     free(direct);
     free(bdpt);
@@ -2294,6 +2338,7 @@ int main(void)
         cmocka_unit_test(test_bdpt_emitter_as_point),
         cmocka_unit_test(test_bdpt_cornell_box),
         cmocka_unit_test(test_determinism),
+        cmocka_unit_test(test_indirect_lobes),
         cmocka_unit_test(test_convergence),
         cmocka_unit_test(test_convergence_sobol),
         cmocka_unit_test(test_passes),
