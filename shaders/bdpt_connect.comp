@@ -9,7 +9,11 @@
 //   (c) z -> z1 through z's map, z1 -> x1 along the bundle: light -> z -> z1 -> x1 (two bounces).
 // (a) and (b)'s light connections make the same paths and are combined with the balance
 // heuristic over the sub-image's n_a VPLs and n_b bundles; (c) is the only strategy for its
-// paths. What reaches x1 is split into its BRDF's diffuse and specular parts (rb_brdf_parts)
+// paths. Emitters: VPL k may be a point y0 on an emitter, whose (a) is direct light (weighed
+// against (b)'s emission hits) and whose (c) is one bounce; its bounce VPL y1 (K_v + k, found
+// by its probe) makes those one-bounce paths again through (a), and the two are weighed over
+// the n_c pairs and n_a VPLs with p(y1 | y0) (y0's density is both sides' and cancels); the
+// bounce VPL's (c) is the emitter's second bounce, the only strategy for it. What reaches x1 is split into its BRDF's diffuse and specular parts (rb_brdf_parts)
 // and added, in k order and without atomics, to x1's own texel of four accumulators.
 #version 460
 #extension GL_GOOGLE_include_directive : require
@@ -165,6 +169,52 @@ void add(inout vec3 diffuse, inout vec3 specular, vec3 n, vec3 v, vec3 l, vec3 f
     specular += ks * x;
 }
 
+// (a) for VPL j: its light at x1, weighed by MIS against the bundle strategy that makes the same
+// paths (n_o of its samples in this sub-image: bundles for punctual and emitter VPLs, pairs for
+// bounce VPLs), into the direct (an emitter's point) or indirect accumulators.
+void from_vpl_at_x1(uint j, vec3 x1, vec3 n1, vec3 ng1, vec3 v1, vec3 f0, float f90, float rough,
+                    float n_o, inout vec3 dd, inout vec3 ds, inout vec3 id, inout vec3 is)
+{
+    uint strategies = pc.index.w;
+    float n_a = pc.counts.x;
+    vec3 l;
+    float r2;
+    vec3 x = from_vpl(j, x1, n1, ng1, strategies == RB_BDPT_VPL, l, r2);
+    if (!any(greaterThan(x, vec3(0.0))))
+        return;
+    float w = 1.0;
+    if (strategies == RB_BDPT_MIS) {
+        float pdf_bundle = rb_bdpt_bundle_density(-dot(vpls[j].normal.xyz, l), r2);
+        w = rb_bdpt_balance(n_a, vpls[j].normal.w, n_o, pdf_bundle);
+    }
+    if (uint(vpls[j].from.w) == RB_BDPT_VPL_EMITTER)
+        add(dd, ds, n1, v1, l, f0, f90, rough, x * (w / n_a));
+    else
+        add(id, is, n1, v1, l, f0, f90, rough, x * (w / n_a));
+}
+
+// (c) for VPL j: its light at the bundle's hit z1 (normal nz, reached along dir from x1, cos_in
+// there), reflected at z1 to x1, times scale (the bundle's 2 pi cos1 / n_c). With mis, j is an
+// emitter's point and the path is weighed against its bounce VPLs finding z1 through (a).
+void via_bundle(uint j, vec3 z1, vec3 nz, vec3 dir, rb_bundle_hit h, float cos_in, vec3 n1,
+                vec3 v1, vec3 f0, float f90, float rough, float scale, bool mis, inout vec3 id,
+                inout vec3 is)
+{
+    vec3 l;
+    float r2;
+    vec3 x = from_vpl(j, z1, nz, nz, true, l, r2);
+    if (!any(greaterThan(x, vec3(0.0))))
+        return;
+    x *= surface_brdf(nz, -dir, l, h.m);
+    float w = 1.0;
+    if (mis) {
+        float pdf_bounce = rb_bdpt_bounce_density(-dot(vpls[j].normal.xyz, l), dot(nz, l), r2);
+        float pdf_bundle = rb_bdpt_bundle_density(cos_in, h.t * h.t);
+        w = rb_bdpt_balance(pc.counts.z, pdf_bundle, pc.counts.x, pdf_bounce);
+    }
+    add(id, is, n1, v1, dir, f0, f90, rough, x * (w * scale));
+}
+
 void main()
 {
     uvec2 local = gl_GlobalInvocationID.xy;
@@ -182,26 +232,18 @@ void main()
     float rough = nr.w, f90 = fr.a;
     uint k = pc.index.x, strategies = pc.index.w;
     bool has_vpl = pc.index.y != 0u && vpls[k].position.w > 0.0, has_bundle = pc.index.z != 0u;
+    bool has_bounce = pc.bounce.x != RB_NONE && vpls[pc.bounce.x].position.w > 0.0;
     float n_a = pc.counts.x, n_b = pc.counts.y, n_c = pc.counts.z;
     vec3 dd = vec3(0.0), ds = vec3(0.0), id = vec3(0.0), is = vec3(0.0);
 
     // (a) VPL k -> x1: light reflected once before x1, or an emitter's point lighting x1
-    // directly (weighed against bundles that find the emitter).
-    if (has_vpl && strategies != RB_BDPT_BUNDLE) {
-        vec3 l;
-        float r2;
-        vec3 x = from_vpl(k, x1, n1, ng1, strategies == RB_BDPT_VPL, l, r2);
-        if (any(greaterThan(x, vec3(0.0)))) {
-            float w = 1.0;
-            if (strategies == RB_BDPT_MIS) {
-                float pdf_bundle = rb_bdpt_bundle_density(-dot(vpls[k].normal.xyz, l), r2);
-                w = rb_bdpt_balance(n_a, vpls[k].normal.w, n_b, pdf_bundle);
-            }
-            if (uint(vpls[k].from.w) == RB_BDPT_VPL_EMITTER)
-                add(dd, ds, n1, v1, l, f0, f90, rough, x * (w / n_a));
-            else
-                add(id, is, n1, v1, l, f0, f90, rough, x * (w / n_a));
-        }
+    // directly (weighed against bundles that find the emitter); then the same for VPL k's
+    // bounce, light reflected once, weighed against (c) of emitter VPLs.
+    if (strategies != RB_BDPT_BUNDLE) {
+        if (has_vpl)
+            from_vpl_at_x1(k, x1, n1, ng1, v1, f0, f90, rough, n_b, dd, ds, id, is);
+        if (has_bounce)
+            from_vpl_at_x1(pc.bounce.x, x1, n1, ng1, v1, f0, f90, rough, n_c, dd, ds, id, is);
     }
 
     // (b) and (c) along bundle k: the direction leaves x1 on its geometric front side, uniform
@@ -238,12 +280,20 @@ void main()
                     vec3 x = from_lights(z1, nz, -dir, h.m, pdf_bundle);
                     add(id, is, n1, v1, dir, f0, f90, rough, x * (scale / n_b));
                 }
-                if (has_vpl && n_c > 0.0) {
-                    vec3 l;
-                    float r2;
-                    vec3 x = from_vpl(k, z1, nz, nz, true, l, r2);
-                    x *= surface_brdf(nz, -dir, l, h.m);
-                    add(id, is, n1, v1, dir, f0, f90, rough, x * (scale / n_c));
+                if (n_c > 0.0) {
+                    // (c): VPL k -> z1 -> x1. An emitter's point makes one-bounce paths, which
+                    // its bounce VPLs also make through (a): weighed against them (p(z1 | y0)
+                    // against the bundle's density of z1), and left to them under
+                    // strategies=vpl. Other VPLs and bounce VPLs make two-bounce paths, for
+                    // which (c) is the only strategy.
+                    bool is_emitter = uint(vpls[k].from.w) == RB_BDPT_VPL_EMITTER;
+                    if (has_vpl && !(is_emitter && strategies == RB_BDPT_VPL))
+                        via_bundle(k, z1, nz, dir, h, cos_in, n1, v1, f0, f90, rough,
+                                              scale / n_c, is_emitter && strategies == RB_BDPT_MIS,
+                                              id, is);
+                    if (has_bounce)
+                        via_bundle(pc.bounce.x, z1, nz, dir, h, cos_in, n1, v1, f0, f90, rough,
+                                   scale / n_c, false, id, is);
                 }
             }
         }

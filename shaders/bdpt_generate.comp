@@ -14,6 +14,7 @@
 #include "lights.glsl"
 #include "material.glsl"
 #include "view.glsl"
+#include "bdpt_views.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -38,6 +39,7 @@ layout(std430, binding = RB_BIND_BDPT_GENERATE_MATERIALS) readonly buffer Materi
 layout(binding = RB_BIND_BDPT_GENERATE_SRGB_TEXTURES) uniform sampler2DArray srgb_textures;
 layout(binding = RB_BIND_BDPT_GENERATE_LINEAR_TEXTURES) uniform sampler2DArray linear_textures;
 layout(std430, binding = RB_BIND_BDPT_GENERATE_EMIT_INFO) writeonly buffer EmitInfo { rb_gpu_bdpt_emit_info emit_info; };
+layout(std430, binding = RB_BIND_BDPT_GENERATE_PROBE_VIEWS) writeonly buffer ProbeViews { rb_gpu_view probe_views[]; };
 layout(push_constant) uniform Push { rb_gpu_bdpt_generate_push pc; };
 
 float luminance(vec3 c)
@@ -76,27 +78,6 @@ vec3 sphere(vec2 u)
 {
     float z = 1.0 - 2.0 * u.x, r = sqrt(max(0.0, 1.0 - z * z)), phi = 2.0 * RB_PI * u.y;
     return vec3(r * cos(phi), r * sin(phi), z);
-}
-
-// A unit vector perpendicular to n, the same for the same n.
-vec3 perpendicular(vec3 n)
-{
-    return normalize(cross(abs(n.y) < 0.99 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0), n));
-}
-
-// The paraboloid view of view.c's rb_view_paraboloid: world to the frame (x right,
-// y = axis x right, z axis), scaled by 1 / far.
-rb_gpu_view paraboloid(vec3 eye, vec3 axis, float far)
-{
-    vec3 x = perpendicular(axis), y = cross(axis, x), z = axis;
-    float s = 1.0 / far;
-    rb_gpu_view v;
-    v.transform = mat4(vec4(x.x, y.x, z.x, 0.0) * s, vec4(x.y, y.y, z.y, 0.0) * s,
-                       vec4(x.z, y.z, z.z, 0.0) * s,
-                       vec4(-dot(x, eye) * s, -dot(y, eye) * s, -dot(z, eye) * s, 1.0));
-    v.origin = vec4(eye, far);
-    v.axis = vec4(axis, 0.0);
-    return v;
 }
 
 void bundle(uint i)
@@ -251,6 +232,14 @@ float emitter_chance(out float sum)
     return total > 0.0 ? flux / total : 0.0;
 }
 
+// A direction about n, distributed as its cosine, from two uniform numbers.
+vec3 cosine_direction(vec3 n, vec2 u)
+{
+    vec3 x = perpendicular(n), y = cross(n, x);
+    float r = sqrt(u.x), phi = 2.0 * RB_PI * u.y;
+    return normalize(x * (r * cos(phi)) + y * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - u.x)));
+}
+
 void vpl(uint i)
 {
     vec3 u = samples[i].u.xyz;
@@ -258,10 +247,21 @@ void vpl(uint i)
     rb_gpu_vpl o = u.x < p_e ? emitter_vpl(vec3(u.x / p_e, u.yz), p_e, sum)
                              : light_vpl(vec3(min((u.x - p_e) / (1.0 - p_e), 1.0), u.yz), p_e);
     vpls[i] = o;
-    // The VPL's hemisphere, its eye a hair above the surface so the surface itself is behind.
-    float far = 2.1 * pc.scene.w;
     vec3 n = o.normal.xyz;
-    vpl_views[i] = paraboloid(o.position.xyz + n * (2e-4 * far), n, far);
+    vpl_views[i] = vpl_view(o.position.xyz, n, pc.scene.w);
+    // An emitter's point also probes, along a cosine-distributed direction, for the surface
+    // its emission reaches first: the bounce VPL (bdpt_bounce.comp). Other VPLs' probes are
+    // empty: every corner at the clip origin, nothing drawn.
+    rb_gpu_view probe;
+    probe.transform = mat4(0.0);
+    probe.origin = vec4(0.0);
+    probe.axis = vec4(0.0);
+    if (uint(o.from.w) == RB_BDPT_VPL_EMITTER && o.position.w > 0.0) {
+        float far = vpl_far(pc.scene.w);
+        probe = probe_view(o.position.xyz + n * vpl_lift(pc.scene.w),
+                           cosine_direction(n, samples[i].v.xy), 1e-4 * far, far);
+    }
+    probe_views[i] = probe;
 }
 
 void main()

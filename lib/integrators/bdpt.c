@@ -1,13 +1,15 @@
 /* The bdpt integrator (seed 000; DESIGN.md "bdpt", BDPT.md): direct's frame, then
- *   rsm -> bounds -> generate -> vpl -> split -> (bundle k -> connect k) for each k -> gather
- *   -> filter -> output.
+ *   rsm -> bounds -> generate -> [probe -> bounce] -> vpl -> split -> (bundle k -> connect k)
+ *   for each k -> gather -> filter -> output.
  * Reflective shadow maps of the shadowed punctual lights give the VPLs' surfaces; the emissive
  * triangles give VPLs too, points on them picked by power, which light the camera's points
  * directly (weighed against the bundles that find the emitter) and, through a bundle, one
- * bounce further; each VPL gets a paraboloid shadow map; each global ray-bundle is an
- * orthographic view into per-pixel linked lists, connected to the sub-image of the interleaved
- * G-buffer it lights before the next one reuses the list. Its history is direct's: one frame,
- * for motion vectors. */
+ * bounce further; each such point probes along a cosine-distributed direction (a 1x1
+ * reflective shadow map) for the surface its light meets first, VPL K_v + i, which gives the
+ * emitter's light its bounces as a punctual light's VPL does. Each VPL gets a paraboloid
+ * shadow map; each global ray-bundle is an orthographic view into per-pixel linked lists,
+ * connected to the sub-image of the interleaved G-buffer it lights before the next one reuses
+ * the list. Its history is direct's: one frame, for motion vectors. */
 #include "integrators/integrators_int.h"
 
 #include <math.h>
@@ -24,7 +26,7 @@ struct bdpt {
 
 /* The sampling table's streams (rb_qmc_point2): fixed, so every scene and frame draws the same
  * numbers. */
-enum { STREAM_VPL_DIRECTION = 1, STREAM_VPL_LIGHT = 2, STREAM_BUNDLE = 3 };
+enum { STREAM_VPL_DIRECTION = 1, STREAM_VPL_LIGHT = 2, STREAM_BUNDLE = 3, STREAM_VPL_BOUNCE = 4 };
 
 static uint32_t history_frames(const struct rb_job *job)
 {
@@ -35,14 +37,17 @@ static uint32_t history_frames(const struct rb_job *job)
 static void release(struct rb_gpu *gpu, struct bdpt *d)
 {
     struct rb_bdpt_frame *b = &d->b;
-    struct rb_gpu_buffer *buffers[] = {&b->bounds,   &b->samples,   &b->lights,
-                                       &b->vpls,     &b->vpl_views, &b->bundle_views,
-                                       &b->emitters, &b->emit_info, &d->usage};
+    struct rb_gpu_buffer *buffers[] = {
+        &b->bounds,      &b->samples,      &b->lights,   &b->vpls,      &b->vpl_views,
+        &b->probe_views, &b->bundle_views, &b->emitters, &b->emit_info, &d->usage};
     for (size_t i = 0; i < COUNT(buffers); i++)
         rb_gpu_buffer_release(gpu, buffers[i]);
-    for (int i = 0; i < RB_VIEW_RSM_TARGETS; i++)
+    for (int i = 0; i < RB_VIEW_RSM_TARGETS; i++) {
         rb_gpu_image_release(gpu, &b->rsm[i]);
+        rb_gpu_image_release(gpu, &b->probe[i]);
+    }
     rb_gpu_image_release(gpu, &b->rsm_depth);
+    rb_gpu_image_release(gpu, &b->probe_depth);
     rb_gpu_image_release(gpu, &b->vpl_maps);
     rb_gpu_image_release(gpu, &b->vpl_depth);
     rb_view_list_release(gpu, &b->bundle);
@@ -88,6 +93,9 @@ static enum rb_status upload_samples(struct rb_gpu *gpu, struct rb_bdpt_frame *b
             s[i].u[0] = rb_qmc_float(l[0]);
             s[i].u[1] = rb_qmc_float(u[0]);
             s[i].u[2] = rb_qmc_float(u[1]);
+            rb_qmc_point2(STREAM_VPL_BOUNCE, index, u);
+            s[i].v[0] = rb_qmc_float(u[0]);
+            s[i].v[1] = rb_qmc_float(u[1]);
         } else {
             rb_qmc_point2(STREAM_BUNDLE, index, u);
             s[i].u[0] = rb_qmc_float(u[0]);
@@ -146,24 +154,31 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
     struct rb_frame *frame = &it->frame;
     struct rb_bdpt_frame *b = &d->b;
     uint32_t kv = b->vpl_count ? b->vpl_count : 1, kb = b->bundle_count ? b->bundle_count : 1;
-    enum rb_status st;
+    enum rb_status st = upload_emitters(it, b, err);
+    if (st)
+        return st;
+    /* With emitters, VPL i's bounce is VPL K_v + i. */
+    b->has_bounce = b->emitter_count > 0 && b->vpl_count > 0;
+    uint32_t all = b->has_bounce ? 2 * kv : kv;
     if ((st = rb_frame_buffer(gpu, 8 * sizeof(uint32_t), STORAGE, false, "bdpt.bounds", &b->bounds,
                               err)) ||
         (st = rb_frame_buffer(gpu, (VkDeviceSize)(kv + kb) * sizeof(struct rb_gpu_bdpt_sample),
                               STORAGE, false, "bdpt.samples", &b->samples, err)) ||
         (st = rb_frame_buffer(gpu, RB_MAX_LIGHTS * sizeof(struct rb_gpu_bdpt_light), STORAGE, true,
                               "bdpt.lights", &b->lights, err)) ||
-        (st = rb_frame_buffer(gpu, kv * sizeof(struct rb_gpu_vpl), STORAGE, false, "bdpt.vpls",
+        (st = rb_frame_buffer(gpu, all * sizeof(struct rb_gpu_vpl), STORAGE, false, "bdpt.vpls",
                               &b->vpls, err)) ||
-        (st = rb_frame_buffer(gpu, kv * sizeof(struct rb_gpu_view), STORAGE, false,
+        (st = rb_frame_buffer(gpu, all * sizeof(struct rb_gpu_view), STORAGE, false,
                               "bdpt.vpl_views", &b->vpl_views, err)) ||
+        (st = rb_frame_buffer(gpu, kv * sizeof(struct rb_gpu_view), STORAGE, false,
+                              "bdpt.probe_views", &b->probe_views, err)) ||
         (st = rb_frame_buffer(gpu, kb * sizeof(struct rb_gpu_view), STORAGE, false,
                               "bdpt.bundle_views", &b->bundle_views, err)) ||
         (st = rb_frame_buffer(gpu, kb * sizeof(struct rb_gpu_list_counter), STORAGE, true,
                               "bdpt.usage", &d->usage, err)) ||
         (st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_bdpt_emit_info), STORAGE, false,
                               "bdpt.emit_info", &b->emit_info, err)) ||
-        (st = upload_emitters(it, b, err)) || (st = upload_samples(gpu, b, err)))
+        (st = upload_samples(gpu, b, err)))
         return st;
 
     const VkImageUsageFlags target =
@@ -173,15 +188,23 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
     uint32_t rsm_layers = frame->shadow_layer_count ? frame->shadow_layer_count : 1;
     static const char *const rsm_names[RB_VIEW_RSM_TARGETS] = {
         "bdpt.rsm.position", "bdpt.rsm.normal", "bdpt.rsm.flux", "bdpt.rsm.material"};
+    static const char *const probe_names[RB_VIEW_RSM_TARGETS] = {
+        "bdpt.probe.position", "bdpt.probe.normal", "bdpt.probe.flux", "bdpt.probe.material"};
     for (int i = 0; i < RB_VIEW_RSM_TARGETS && st == RB_OK; i++)
-        st = rb_frame_image(gpu, rsm, rsm, rsm_layers, rb_view_rsm_formats[i], target, true,
-                            rsm_names[i], &b->rsm[i], err);
+        if ((st = rb_frame_image(gpu, rsm, rsm, rsm_layers, rb_view_rsm_formats[i], target, true,
+                                 rsm_names[i], &b->rsm[i], err)) == RB_OK)
+            st = rb_frame_image(gpu, 1, 1, kv, rb_view_rsm_formats[i], target, true, probe_names[i],
+                                &b->probe[i], err);
+    if (st == RB_OK)
+        st = rb_frame_image(gpu, 1, 1, 1, VK_FORMAT_D32_SFLOAT,
+                            VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "bdpt.probe.depth",
+                            &b->probe_depth, err);
     if (st == RB_OK)
         st = rb_frame_image(gpu, rsm, rsm, 1, VK_FORMAT_D32_SFLOAT,
                             VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false, "bdpt.rsm.depth",
                             &b->rsm_depth, err);
     if (st == RB_OK)
-        st = rb_frame_image(gpu, b->vpl_size_px, b->vpl_size_px, kv, VK_FORMAT_R32_SFLOAT,
+        st = rb_frame_image(gpu, b->vpl_size_px, b->vpl_size_px, all, VK_FORMAT_R32_SFLOAT,
                             VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, true,
                             "bdpt.vpl_maps", &b->vpl_maps, err);
     if (st == RB_OK)
@@ -223,8 +246,9 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
     VkCommandBuffer cmd;
     if ((st = rb_gpu_oneshot_begin(gpu, &cmd, err)))
         return st;
-    struct rb_gpu_image *general[] = {&b->rsm[0],    &b->rsm[1],   &b->rsm[2],   &b->rsm[3],
-                                      &b->rsm_depth, &b->vpl_maps, &b->vpl_depth};
+    struct rb_gpu_image *general[] = {&b->rsm[0],    &b->rsm[1],      &b->rsm[2],   &b->rsm[3],
+                                      &b->rsm_depth, &b->probe[0],    &b->probe[1], &b->probe[2],
+                                      &b->probe[3],  &b->probe_depth, &b->vpl_maps, &b->vpl_depth};
     for (size_t i = 0; i < COUNT(general); i++)
         rb_gpu_image_barrier(gpu, cmd, general[i], VK_IMAGE_LAYOUT_UNDEFINED,
                              VK_IMAGE_LAYOUT_GENERAL);
@@ -382,6 +406,52 @@ static void record_rsm(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer
     rb_integrator_pass_end(it, cmd);
 }
 
+/* The emitters' bounces: each emitter VPL's probe (a 1x1 reflective shadow map along its
+ * direction: the first surface its light meets), then VPLs K_v + i from them. */
+static void record_bounce(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer cmd,
+                          const struct rb_frame_ctx *ctx)
+{
+    struct rb_frame *frame = &it->frame;
+    struct rb_bdpt_frame *b = &d->b;
+    const struct rb_gpu_access probe[] = {
+        {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
+        {.buffer = &b->probe_views, .use = RB_GPU_GRAPHICS_READ},
+        {.buffer = view_indices(frame), .use = RB_GPU_INDEX_READ},
+        {.buffer = &frame->materials, .use = RB_GPU_FRAGMENT_READ},
+        {.image = &frame->srgb_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
+        {.image = &frame->linear_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
+        {.image = &b->probe[0], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &b->probe[1], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &b->probe[2], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &b->probe[3], .use = RB_GPU_COLOR_ATTACHMENT},
+        {.image = &b->probe_depth, .use = RB_GPU_DEPTH_ATTACHMENT},
+    };
+    rb_integrator_pass_begin(it, cmd, "probe", probe, COUNT(probe));
+    rb_pass_view_record(d->views, cmd, frame, ctx->cur,
+                        &(struct rb_view_batch){
+                            .kind = RB_VIEW_KIND_PERSPECTIVE,
+                            .output = RB_VIEW_OUTPUT_RSM,
+                            .views = &b->probe_views,
+                            .view_count = b->vpl_count,
+                            .targets = {&b->probe[0], &b->probe[1], &b->probe[2], &b->probe[3]},
+                            .depth = &b->probe_depth,
+                            .use_simplified = true,
+                        });
+    rb_integrator_pass_end(it, cmd);
+
+    const struct rb_gpu_access bounce[] = {
+        {.buffer = &b->vpls, .use = RB_GPU_COMPUTE_READ_WRITE},
+        {.buffer = &b->vpl_views, .use = RB_GPU_COMPUTE_WRITE},
+        {.buffer = &b->probe_views, .use = RB_GPU_COMPUTE_READ},
+        {.image = &b->probe[0], .use = RB_GPU_COMPUTE_READ},
+        {.image = &b->probe[1], .use = RB_GPU_COMPUTE_READ},
+        {.image = &b->probe[3], .use = RB_GPU_COMPUTE_READ},
+    };
+    rb_integrator_pass_begin(it, cmd, "bounce", bounce, COUNT(bounce));
+    rb_pass_bdpt_bounce_record(d->passes, cmd, b);
+    rb_integrator_pass_end(it, cmd);
+}
+
 static void record_bundle(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer cmd,
                           const struct rb_frame_ctx *ctx, uint32_t k)
 {
@@ -490,10 +560,13 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
         {.image = &frame->srgb_textures, .use = RB_GPU_COMPUTE_SAMPLED},
         {.image = &frame->linear_textures, .use = RB_GPU_COMPUTE_SAMPLED},
         {.buffer = &b->emit_info, .use = RB_GPU_COMPUTE_WRITE},
+        {.buffer = &b->probe_views, .use = RB_GPU_COMPUTE_WRITE},
     };
     rb_integrator_pass_begin(it, cmd, "generate", generate, COUNT(generate));
     rb_pass_bdpt_generate_record(d->passes, cmd, frame, ctx->cur, b);
     rb_integrator_pass_end(it, cmd);
+    if (b->has_bounce)
+        record_bounce(it, d, cmd, ctx);
 
     if (b->vpl_count) {
         const struct rb_gpu_access vpl[] = {
@@ -509,7 +582,7 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
                                 .kind = RB_VIEW_KIND_PARABOLOID,
                                 .output = RB_VIEW_OUTPUT_DEPTH,
                                 .views = &b->vpl_views,
-                                .view_count = b->vpl_count,
+                                .view_count = b->has_bounce ? 2 * b->vpl_count : b->vpl_count,
                                 .targets = {&b->vpl_maps},
                                 .depth = &b->vpl_depth,
                                 .use_simplified = true,

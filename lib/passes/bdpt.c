@@ -6,6 +6,7 @@
 
 #include <stdlib.h>
 
+#include "bdpt_bounce.comp.h"
 #include "bdpt_bounds.comp.h"
 #include "bdpt_connect.comp.h"
 #include "bdpt_filter.comp.h"
@@ -14,7 +15,7 @@
 #include "bdpt_split.comp.h"
 
 struct rb_pass_bdpt {
-    struct rb_pass bounds, generate, split, connect, gather, filter;
+    struct rb_pass bounds, generate, bounce, split, connect, gather, filter;
 };
 
 static const struct rb_pass_binding bounds_bindings[] = {
@@ -41,8 +42,19 @@ static const struct rb_pass_binding generate_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_SRGB_TEXTURES, COMBINED_IMAGE_SAMPLER),
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_LINEAR_TEXTURES, COMBINED_IMAGE_SAMPLER),
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_EMIT_INFO, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_GENERATE_PROBE_VIEWS, STORAGE_BUFFER),
 };
 _Static_assert(COUNT(generate_bindings) == RB_BIND_BDPT_GENERATE_COUNT, "generate bindings");
+
+static const struct rb_pass_binding bounce_bindings[] = {
+    RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_VPLS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_VPL_VIEWS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_PROBE_VIEWS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_PROBE_POSITION, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_PROBE_NORMAL, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_PROBE_MATERIAL, STORAGE_IMAGE),
+};
+_Static_assert(COUNT(bounce_bindings) == RB_BIND_BDPT_BOUNCE_COUNT, "bounce bindings");
 
 static const struct rb_pass_binding split_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_SPLIT_GB_POSITION, STORAGE_IMAGE),
@@ -132,6 +144,8 @@ enum rb_status rb_pass_bdpt_create(struct rb_gpu *gpu, struct rb_pass_bdpt **out
     if ((st = COMPUTE(bounds, "bounds", bounds_bindings, 0, rb_spv_bdpt_bounds_comp)) ||
         (st = COMPUTE(generate, "generate", generate_bindings,
                       sizeof(struct rb_gpu_bdpt_generate_push), rb_spv_bdpt_generate_comp)) ||
+        (st = COMPUTE(bounce, "bounce", bounce_bindings, sizeof(struct rb_gpu_bdpt_bounce_push),
+                      rb_spv_bdpt_bounce_comp)) ||
         (st = COMPUTE(split, "split", split_bindings, image_push, rb_spv_bdpt_split_comp)) ||
         (st = COMPUTE(connect, "connect", connect_bindings, sizeof(struct rb_gpu_bdpt_connect_push),
                       rb_spv_bdpt_connect_comp)) ||
@@ -152,6 +166,7 @@ void rb_pass_bdpt_destroy(struct rb_pass_bdpt *p)
     rb_pass_release(&p->gather);
     rb_pass_release(&p->connect);
     rb_pass_release(&p->split);
+    rb_pass_release(&p->bounce);
     rb_pass_release(&p->generate);
     rb_pass_release(&p->bounds);
     free(p);
@@ -221,6 +236,7 @@ void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     rb_pass_bind_image(&bind, RB_BIND_BDPT_GENERATE_LINEAR_TEXTURES, frame->linear_textures.view,
                        p->generate.gpu->linear_sampler);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_EMIT_INFO, &b->emit_info);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_PROBE_VIEWS, &b->probe_views);
     rb_pass_record_bindings(cmd, &bind);
     struct rb_gpu_bdpt_generate_push pc = {
         .counts = {b->vpl_count, b->bundle_count, frame->light_count, b->rsm[0].width_px},
@@ -231,6 +247,25 @@ void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     push(cmd, &p->generate, &pc, sizeof(pc));
     uint32_t n = b->vpl_count > b->bundle_count ? b->vpl_count : b->bundle_count;
     vkCmdDispatch(cmd, groups(n, 64), 1, 1);
+}
+
+void rb_pass_bdpt_bounce_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                const struct rb_bdpt_frame *b)
+{
+    struct rb_pass_bindings bind = {.pass = &p->bounce};
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_BOUNCE_VPLS, &b->vpls);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_BOUNCE_VPL_VIEWS, &b->vpl_views);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_BOUNCE_PROBE_VIEWS, &b->probe_views);
+    rb_pass_bind_image(&bind, RB_BIND_BDPT_BOUNCE_PROBE_POSITION, b->probe[0].view, VK_NULL_HANDLE);
+    rb_pass_bind_image(&bind, RB_BIND_BDPT_BOUNCE_PROBE_NORMAL, b->probe[1].view, VK_NULL_HANDLE);
+    rb_pass_bind_image(&bind, RB_BIND_BDPT_BOUNCE_PROBE_MATERIAL, b->probe[3].view, VK_NULL_HANDLE);
+    rb_pass_record_bindings(cmd, &bind);
+    struct rb_gpu_bdpt_bounce_push pc = {
+        .counts = {b->vpl_count, 0, 0, 0},
+        .scene = {b->scene_centre[0], b->scene_centre[1], b->scene_centre[2], b->scene_radius},
+    };
+    push(cmd, &p->bounce, &pc, sizeof(pc));
+    vkCmdDispatch(cmd, groups(b->vpl_count, 64), 1, 1);
 }
 
 void rb_pass_bdpt_split_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
@@ -299,6 +334,7 @@ void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                    (float)share(pairs, s, count), b->clamp_g},
         .params = {b->vpl_bias, (float)b->vpl_size_px, (float)b->bundle_size_px,
                    (float)b->bundle.capacity_nodes},
+        .bounce = {b->has_bounce && k < b->vpl_count ? b->vpl_count + k : RB_NONE, 0, 0, 0},
     };
     push(cmd, &p->connect, &pc, sizeof(pc));
     vkCmdDispatch(cmd, groups(b->sub_width_px, 8), groups(b->sub_height_px, 8), 1);

@@ -22,11 +22,12 @@ _Static_assert(sizeof(struct rb_gpu_list_node) == 20, "list node layout: seed 00
 _Static_assert(sizeof(struct rb_gpu_list_counter) == 16, "list counter layout");
 _Static_assert(sizeof(struct rb_gpu_vpl) == 80, "VPL layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_light) == 16, "bdpt light layout");
-_Static_assert(sizeof(struct rb_gpu_bdpt_sample) == 16, "bdpt sample layout");
+_Static_assert(sizeof(struct rb_gpu_bdpt_sample) == 32, "bdpt sample layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_emitter) == 16, "bdpt emitter layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_emit_info) == 16, "bdpt emitter summary layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_generate_push) == 48, "generate push constants");
-_Static_assert(sizeof(struct rb_gpu_bdpt_connect_push) == 64, "connect push constants");
+_Static_assert(sizeof(struct rb_gpu_bdpt_connect_push) == 80, "connect push constants");
+_Static_assert(sizeof(struct rb_gpu_bdpt_bounce_push) == 32, "bounce push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_image_push) == 32, "split/gather/filter push constants");
 _Static_assert(sizeof(struct rb_scene_vertex) == RB_SRC_VERTEX_FLOATS * 4, "source vertex");
 _Static_assert(sizeof(struct rb_scene_morph_delta) == RB_MORPH_DELTA_FLOATS * 4, "morph delta");
@@ -282,17 +283,21 @@ struct rb_bdpt_frame {
     float scene_centre[3], scene_radius; /* the job's bounds */
     uint32_t emitter_count;              /* emissive triangles */
     float punctual_power;                /* W: the punctual lights' that have VPLs, this frame */
+    bool has_bounce; /* emitters' VPLs probe for their bounces: VPLs K_v..2 K_v - 1 */
 
     struct rb_gpu_buffer bounds;       /* lo[4], hi[4]: the G-buffer's box (bdpt_bounds.comp) */
     struct rb_gpu_buffer samples;      /* struct rb_gpu_bdpt_sample [K_v + K_b] */
     struct rb_gpu_buffer lights;       /* struct rb_gpu_bdpt_light per light, host-visible */
-    struct rb_gpu_buffer vpls;         /* struct rb_gpu_vpl [K_v] */
-    struct rb_gpu_buffer vpl_views;    /* struct rb_gpu_view [K_v]: paraboloid */
+    struct rb_gpu_buffer vpls;         /* struct rb_gpu_vpl [K_v], [2 K_v] with bounces */
+    struct rb_gpu_buffer vpl_views;    /* struct rb_gpu_view, as vpls: paraboloid */
+    struct rb_gpu_buffer probe_views;  /* struct rb_gpu_view [K_v]: perspective, 1x1 */
     struct rb_gpu_buffer bundle_views; /* struct rb_gpu_view [K_b]: orthographic */
     struct rb_gpu_buffer emitters;     /* struct rb_gpu_bdpt_emitter [emitter_count] */
     struct rb_gpu_buffer emit_info;    /* struct rb_gpu_bdpt_emit_info */
     struct rb_gpu_image rsm[RB_VIEW_RSM_TARGETS];   /* a layer per shadow layer of the frame */
     struct rb_gpu_image rsm_depth;                  /* D32 scratch */
+    struct rb_gpu_image probe[RB_VIEW_RSM_TARGETS]; /* 1x1, a layer per VPL (with bounces) */
+    struct rb_gpu_image probe_depth;                /* D32 scratch, 1x1 */
     struct rb_gpu_image vpl_maps;                   /* R32F, a layer per VPL */
     struct rb_gpu_image vpl_depth;                  /* D32 scratch */
     struct rb_view_list bundle;                     /* one layer: the bundle being connected */
@@ -316,6 +321,9 @@ void rb_pass_bdpt_bounds_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
 void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                   const struct rb_frame *frame, const struct rb_frame_slot *slot,
                                   const struct rb_bdpt_frame *b);
+/* VPLs K_v + i, the bounces of the emitters' VPLs i, from their probes, and their views. */
+void rb_pass_bdpt_bounce_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                const struct rb_bdpt_frame *b);
 /* The G-buffer into n x n sub-images (b->split); zeroes b->accum. */
 void rb_pass_bdpt_split_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                const struct rb_frame *frame, const struct rb_bdpt_frame *b);

@@ -26,6 +26,12 @@ struct rb_gpu_vpl {
  * from. */
 #define RB_BDPT_VPL_EMITTER 4
 
+/* A VPL's from.w when it is the first surface y1 a point y0 on an emitter sees along a cosine-
+ * distributed direction (BDPT.md "As implemented", emitters' bounce): VPL K_v + i, the bounce
+ * of emitter VPL i, found by i's probe view. It reflects what y0 sends it; from.xyz is y0; its
+ * normal.w is p(y1 | y0), y1's area density given y0 (rb_bdpt_bounce_density). */
+#define RB_BDPT_VPL_BOUNCE 5
+
 /* One emissive triangle, listed once when the integrator starts (a triangle of the scene whose
  * material's emissive factor is above zero). */
 struct rb_gpu_bdpt_emitter {
@@ -53,6 +59,7 @@ struct rb_gpu_bdpt_light {
 struct rb_gpu_bdpt_sample {
     RB_VEC4(u); /* VPL: light choice, two for the direction or beam point; bundle: two for the
                  * direction; w unused */
+    RB_VEC4(v); /* VPL: two for the direction of an emitter point's bounce; z, w unused */
 };
 
 /* Push constants of bdpt_generate.comp. */
@@ -71,6 +78,14 @@ struct rb_gpu_bdpt_connect_push {
     RB_VEC4(counts);   /* samples of the sub-image: VPLs n_a, bundles n_b, pairs n_c (as
                         * floats); the G clamp (0: none) */
     RB_VEC4(params);   /* VPL bias, VPL map size, bundle grid size, node capacity */
+    RB_UVEC4(bounce);  /* x: the index of VPL k's bounce (K_v + k), or RB_NONE where the frame
+                        * has none; y, z, w: unused */
+};
+
+/* Push constants of bdpt_bounce.comp. */
+struct rb_gpu_bdpt_bounce_push {
+    RB_UVEC4(counts); /* K_v, unused, unused, unused */
+    RB_VEC4(scene);   /* xyz: the centre of the job's bounds; w: their radius */
 };
 
 /* Push constants of the split, gather and filter passes. */
@@ -99,6 +114,13 @@ RB_BDPT_FN float rb_bdpt_bundle_density(float cos_z, float dist2)
 RB_BDPT_FN float rb_bdpt_vpl_density(float pdf, float cos_in, float dist2)
 {
     return pdf * cos_in / dist2;
+}
+
+/* The area density at y1 of the bounce of an emitter's point y0: a cosine-distributed
+ * direction from y0 (cos_y0 / pi) seen from y1 at cos_y1, dist2 away. */
+RB_BDPT_FN float rb_bdpt_bounce_density(float cos_y0, float cos_y1, float dist2)
+{
+    return cos_y0 * cos_y1 / (3.14159265358979f * dist2);
 }
 
 /* The balance heuristic over a pixel's samples: the weight of a strategy drawn n_s times that

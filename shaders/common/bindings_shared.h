@@ -75,7 +75,17 @@
 #define RB_BIND_BDPT_GENERATE_SRGB_TEXTURES 14
 #define RB_BIND_BDPT_GENERATE_LINEAR_TEXTURES 15
 #define RB_BIND_BDPT_GENERATE_EMIT_INFO 16 /* written: rb_gpu_bdpt_emit_info */
-#define RB_BIND_BDPT_GENERATE_COUNT 17
+#define RB_BIND_BDPT_GENERATE_PROBE_VIEWS 17 /* written: an emitter VPL's probe, perspective */
+#define RB_BIND_BDPT_GENERATE_COUNT 18
+
+/* bdpt_bounce.comp: the bounces of the emitters' VPLs, from their probes */
+#define RB_BIND_BDPT_BOUNCE_VPLS 0 /* read (VPL i), written (VPL K_v + i) */
+#define RB_BIND_BDPT_BOUNCE_VPL_VIEWS 1 /* written */
+#define RB_BIND_BDPT_BOUNCE_PROBE_VIEWS 2
+#define RB_BIND_BDPT_BOUNCE_PROBE_POSITION 3
+#define RB_BIND_BDPT_BOUNCE_PROBE_NORMAL 4
+#define RB_BIND_BDPT_BOUNCE_PROBE_MATERIAL 5
+#define RB_BIND_BDPT_BOUNCE_COUNT 6
 
 /* bdpt_split.comp: the G-buffer into n x n sub-images */
 #define RB_BIND_BDPT_SPLIT_GB_POSITION 0

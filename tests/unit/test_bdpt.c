@@ -110,12 +110,57 @@ static void test_densities(void **state)
     assert_float_equal(rb_bdpt_vpl_density(0.25f, 0.5f, 4.0f), 0.25f * 0.5f / 4.0f, 1e-7f);
 }
 
+/* The emitters' one-bounce paths y0 -> y1 -> x1: the bounce VPL y1 (a cosine-distributed
+ * direction from y0) against the bundle from x1 finding y1 with y0 as the emitter VPL (the
+ * pairs' strategy (c)). y0's own density is the same on both sides and cancels; the two
+ * weights, with their own sample counts, sum to one. And the bounce's area density is a
+ * density: over a large plane facing y0 at height 1 it integrates to 1. */
+static void test_bounce(void **state)
+{
+    (void)state;
+    uint64_t rng = 7;
+    double worst = 0.0;
+    for (int i = 0; i < 100000; i++) {
+        struct rb_vec3 y0 = rb_v3_scale(unit(&rng), 3.0f * uniform(&rng) + 0.01f);
+        struct rb_vec3 n0 = unit(&rng), x1 = rb_v3_scale(unit(&rng), 3.0f);
+        struct rb_vec3 y1 = rb_v3_scale(unit(&rng), 0.5f * uniform(&rng)), n1 = unit(&rng);
+        struct rb_vec3 to_0 = rb_v3_sub(y0, y1), to_x = rb_v3_sub(x1, y1);
+        float d0 = rb_v3_dot(to_0, to_0), dx = rb_v3_dot(to_x, to_x);
+        float cos0 = -rb_v3_dot(n0, to_0) / sqrtf(d0),
+              cos1 = fabsf(rb_v3_dot(n1, to_0)) / sqrtf(d0);
+        if (!(cos0 > 0.0f))
+            continue;
+        float p_bounce = rb_bdpt_bounce_density(cos0, cos1, d0);
+        float p_bundle = rb_bdpt_bundle_density(fabsf(rb_v3_dot(n1, to_x)) / sqrtf(dx), dx);
+        float n_a = (float)(1 + (int)(uniform(&rng) * 8.0f));
+        float n_c = (float)(1 + (int)(uniform(&rng) * 8.0f));
+        if (!(p_bounce > 0.0f && p_bundle > 0.0f))
+            continue;
+        float wa = rb_bdpt_balance(n_a, p_bounce, n_c, p_bundle);
+        float wc = rb_bdpt_balance(n_c, p_bundle, n_a, p_bounce);
+        assert_true(wa >= 0.0f && wa <= 1.0f && wc >= 0.0f && wc <= 1.0f);
+        double err = fabs((double)wa + (double)wc - 1.0);
+        if (err > worst)
+            worst = err;
+    }
+    assert_true(worst < 1e-6);
+    double sum = 0.0, step = 0.02;
+    for (double u = -50.0; u < 50.0; u += step)
+        for (double v = -50.0; v < 50.0; v += step) {
+            double px = u + step / 2, py = v + step / 2, d2 = px * px + py * py + 1.0;
+            float c = (float)(1.0 / sqrt(d2));
+            sum += rb_bdpt_bounce_density(c, c, (float)d2) * step * step;
+        }
+    assert_true(fabs(sum - 1.0) < 0.002); /* beyond 50 m: 1 / 2501 of it */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_weights_sum_to_one),
         cmocka_unit_test(test_limits),
         cmocka_unit_test(test_densities),
+        cmocka_unit_test(test_bounce),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
