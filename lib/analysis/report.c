@@ -104,19 +104,61 @@ static enum rb_status add_frame(struct rb_analysis_sequence *s, const char *name
     return RB_OK;
 }
 
-enum rb_status rb_analysis_sequence_scan(const char *dir, struct rb_analysis_sequence *out,
+/* Splits the pattern "DIR/STEM.###.exr" (one run of '#' for the frame number) into out's dir and
+ * stem; false, with out untouched, when seq's last component has no '#' (a directory). */
+static bool split_pattern(const char *seq, struct rb_analysis_sequence *out, enum rb_status *st,
+                          struct rb_err *err)
+{
+    const char *slash = strrchr(seq, '/'), *name = slash ? slash + 1 : seq;
+    char probe[sizeof(out->stem) + 16];
+    size_t stem_len, n = strlen(name);
+    int frame;
+    *st = RB_OK;
+    if (!strchr(name, '#'))
+        return false;
+    /* The name with its '#'s as digits must be a frame's name whose digits were all '#'. */
+    bool is_frame = n < sizeof(probe);
+    for (size_t i = 0; is_frame && i <= n; i++)
+        probe[i] = name[i] == '#' ? '0' : name[i];
+    is_frame = is_frame && frame_name(probe, &stem_len, &frame) && stem_len < sizeof(out->stem) &&
+               !memchr(name, '#', stem_len) &&
+               strspn(name + stem_len + 1, "#") == n - stem_len - 1 - strlen(".exr");
+    if (!is_frame) {
+        *st = rb_errf(err, RB_E_INVALID,
+                      "'%s' is neither a directory nor a pattern DIR/NAME.####.exr", seq);
+        return true;
+    }
+    size_t dir_len = slash ? (size_t)(slash - seq) : 0;
+    if (dir_len >= sizeof(out->dir)) {
+        *st = rb_errf(err, RB_E_INVALID, "directory '%.40s...' is too long", seq);
+        return true;
+    }
+    if (!slash)
+        rb_strlcpy(out->dir, ".", sizeof(out->dir));
+    else if (dir_len == 0)
+        rb_strlcpy(out->dir, "/", sizeof(out->dir));
+    else
+        memcpy(out->dir, seq, dir_len);
+    memcpy(out->stem, name, stem_len);
+    return true;
+}
+
+enum rb_status rb_analysis_sequence_scan(const char *seq, struct rb_analysis_sequence *out,
                                          struct rb_err *err)
 {
     memset(out, 0, sizeof(*out));
-    if (rb_strlcpy(out->dir, dir, sizeof(out->dir)) >= sizeof(out->dir))
-        return rb_errf(err, RB_E_INVALID, "directory '%.40s...' is too long", dir);
+    enum rb_status st = RB_OK;
+    bool is_pattern = split_pattern(seq, out, &st, err);
+    if (st)
+        return st;
+    if (!is_pattern && rb_strlcpy(out->dir, seq, sizeof(out->dir)) >= sizeof(out->dir))
+        return rb_errf(err, RB_E_INVALID, "directory '%.40s...' is too long", seq);
     size_t len = strlen(out->dir);
     while (len > 1 && out->dir[len - 1] == '/')
         out->dir[--len] = '\0';
     DIR *d = opendir(out->dir);
     if (!d)
         return rb_errf(err, RB_E_IO, "cannot open '%s': %s", out->dir, strerror(errno));
-    enum rb_status st = RB_OK;
     char other[256] = "";
     struct dirent *e;
     while (st == RB_OK && (e = readdir(d))) {
@@ -124,6 +166,11 @@ enum rb_status rb_analysis_sequence_scan(const char *dir, struct rb_analysis_seq
         int frame;
         if (!frame_name(e->d_name, &stem_len, &frame))
             continue;
+        if (is_pattern) { /* the pattern's frames alone */
+            if (strlen(out->stem) == stem_len && !strncmp(out->stem, e->d_name, stem_len))
+                st = add_frame(out, e->d_name, frame, err);
+            continue;
+        }
         if (stem_len >= sizeof(out->stem)) {
             st = rb_errf(err, RB_E_INVALID, "'%s/%s': the name is too long", out->dir, e->d_name);
             break;
@@ -145,6 +192,8 @@ enum rb_status rb_analysis_sequence_scan(const char *dir, struct rb_analysis_seq
     closedir(d);
     if (st)
         return st;
+    if (!out->frame_count && is_pattern)
+        return rb_errf(err, RB_E_INVALID, "no frames match '%s'", seq);
     if (!out->frame_count)
         return rb_errf(err, RB_E_INVALID, "'%s' holds no frames (files named NAME.####.exr)",
                        out->dir);
@@ -157,7 +206,7 @@ enum rb_status rb_analysis_sequence_scan(const char *dir, struct rb_analysis_seq
     return sort_frames(out, err);
 }
 
-static long find_frame(const struct rb_analysis_sequence *s, int frame)
+long rb_analysis_sequence_find(const struct rb_analysis_sequence *s, int frame)
 {
     for (size_t i = 0; i < s->frame_count; i++)
         if (s->frames[i] == frame)
@@ -227,20 +276,11 @@ struct beauty {
 
 static enum rb_status read_beauty(const char *path, struct beauty *out, struct rb_err *err)
 {
-    struct rb_io_image img = {0};
-    struct rb_analysis_layer layer;
-    enum rb_status st;
+    static const char *const beauty[] = {"beauty"};
     free(out->rgb);
     out->rgb = NULL;
-    if ((st = rb_analysis_layer_resolve("beauty", &layer, err)) ||
-        (st = rb_io_image_read(path, &img, err)) ||
-        (st = rb_analysis_layer_extract(&layer, &img, path, &out->rgb, err)))
-        goto out;
-    out->width_px = img.width_px;
-    out->height_px = img.height_px;
-out:
-    rb_io_image_release(&img);
-    return st;
+    return rb_analysis_layers_read(path, beauty, 1, &out->rgb, &out->width_px, &out->height_px,
+                                   err);
 }
 
 /* RMSE or relMSE of a against the reference b, the same size. */
@@ -399,7 +439,7 @@ static enum rb_status read_reference(const struct rb_analysis_report_desc *desc,
                                      struct beauty *prev, bool has_prev, struct rb_err *err)
 {
     struct rb_analysis_report_frame *f = &r->frames[i];
-    long k = find_frame(&r->ref, f->frame);
+    long k = rb_analysis_sequence_find(&r->ref, f->frame);
     if (k < 0)
         return rb_errf(err, RB_E_INVALID, "the reference '%s' has no frame %d (for '%s')",
                        r->ref.dir, f->frame, r->seq.paths[i]);
