@@ -3,8 +3,9 @@
  * a reference sequence and the hit-ratio image's mean, thumbnails through the OCIO view; then one
  * self-contained HTML page with inline SVG charts drawn at fixed positions (raybundle-report(1)).
  * The numbers come from the readers and metrics the other commands use (rb_io_timing_read,
- * rb_analysis_compare); this file adds the layout. Plots whose data the sequence does not have
- * (hit ratios, motion-compensated flicker) say so in their place; nothing is made up. */
+ * rb_analysis_compare, rb_analysis_flicker_create); this file adds the layout. Plots whose data
+ * the sequence does not have (hit ratios; flicker without motion and depth layers) say so in
+ * their place; nothing is made up. */
 #include "analysis/analysis.h"
 
 #include <dirent.h>
@@ -514,6 +515,30 @@ static enum rb_status read_frames(const struct rb_analysis_report_desc *desc,
     return st;
 }
 
+/* The flicker metrics of the same sequences, or the reason there are none in flicker_note. */
+static enum rb_status read_flicker(const struct rb_analysis_report_desc *desc,
+                                   struct rb_analysis_report *r, struct rb_err *err)
+{
+    struct rb_analysis_flicker *f = NULL;
+    struct rb_err why = RB_ERR_INIT;
+    enum rb_status st = rb_analysis_flicker_create(
+        &(struct rb_analysis_flicker_desc){.seq = desc->dir, .reference = desc->reference_dir}, &f,
+        &why);
+    if (st == RB_E_NOMEM)
+        return rb_errf(err, st, "%s", why.msg);
+    if (st) {
+        rb_strlcpy(r->flicker_note, why.msg, sizeof(r->flicker_note));
+        return RB_OK;
+    }
+    for (size_t i = 0; i < r->seq.frame_count; i++) {
+        r->frames[i].warped_error = f->frames[i].seq.warped_error;
+        r->frames[i].reference_warped_error = f->frames[i].ref.warped_error;
+        r->frames[i].excess_error = f->frames[i].excess_error;
+    }
+    rb_analysis_flicker_destroy(f);
+    return RB_OK;
+}
+
 enum rb_status rb_analysis_report_create(const struct rb_analysis_report_desc *desc,
                                          struct rb_analysis_report **out, struct rb_err *err)
 {
@@ -540,8 +565,11 @@ enum rb_status rb_analysis_report_create(const struct rb_analysis_report_desc *d
             .reference_temporal_rmse = NAN,
             .relmse = NAN,
             .hit_ratio = NAN,
+            .warped_error = NAN,
+            .reference_warped_error = NAN,
+            .excess_error = NAN,
         };
-    if ((st = read_frames(desc, r, err)))
+    if ((st = read_frames(desc, r, err)) || (st = read_flicker(desc, r, err)))
         goto fail;
     *out = r;
     return RB_OK;
@@ -921,10 +949,20 @@ static void page(FILE *f, const struct rb_analysis_report *r)
           "Frame-to-frame difference (RMSE of the beauty against the previous frame; "
           "motion counts)",
           temporal, r->has_reference ? 2 : 1, "", 0.0);
-    chart_none(f, chart++, "warped", "Warped and excess temporal error",
-               "Not computed: the warped temporal error and its excess over the reference's need "
-               "motion-compensated flicker metrics, which this version does not have. The plain "
-               "frame-to-frame difference above counts motion as change.");
+    const struct series warped[] = {
+        {"sequence", "#4e79a7", FIELD(warped_error)},
+        {"reference", "#59a14f", FIELD(reference_warped_error)},
+        {"excess", "#e15759", FIELD(excess_error)},
+    };
+    char note[600];
+    snprintf(note, sizeof(note), "Not computed: %s.", r->flicker_note);
+    if (*r->flicker_note)
+        chart_none(f, chart++, "warped", "Warped and excess temporal error", note);
+    else
+        lines(f, r, chart++, "warped",
+              "Warped temporal error (log luminance, motion-compensated) and excess over the "
+              "reference (raybundle flicker)",
+              warped, r->has_reference ? 3 : 1, "", 0.0);
     const struct series relmse[] = {{"relMSE", "#e15759", FIELD(relmse)}};
     if (r->has_reference)
         lines(f, r, chart++, "reference-error",
