@@ -95,8 +95,11 @@ static int parse_options(int argc, char **argv, struct options *o)
             if (positive("--log-epsilon", optarg, false, &o->desc.log_epsilon))
                 return -1;
             break;
-        case O_JSON: o->format = FORMAT_JSON, formats++; break;
-        case O_CSV: o->format = FORMAT_CSV, formats++; break;
+        case O_JSON:
+        case O_CSV:
+            o->format = c == O_JSON ? FORMAT_JSON : FORMAT_CSV;
+            formats++;
+            break;
         case 'h': usage(stdout); return 1;
         default: usage(stderr); return -1;
         }

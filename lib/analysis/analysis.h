@@ -360,6 +360,7 @@ struct rb_analysis_flicker {
  * RB_E_NOMEM; *out only on success. desc's strings must outlive *out. */
 enum rb_status rb_analysis_flicker_create(const struct rb_analysis_flicker_desc *desc,
                                           struct rb_analysis_flicker **out, struct rb_err *err);
+/* Frees f and what it owns; NULL is fine. */
 void rb_analysis_flicker_destroy(struct rb_analysis_flicker *f);
 
 /* ---- report (report.c) ------------------------------------------------------------------ */
