@@ -217,6 +217,7 @@ install: $(BUILD)/raybundle
 uninstall:
 	rm -f "$(DESTDIR)$(BINDIR)/raybundle" "$(DESTDIR)$(MANDIR)/man1/raybundle.1" \
 		"$(DESTDIR)$(MANDIR)/man1/raybundle-bench.1" \
+		"$(DESTDIR)$(MANDIR)/man1/raybundle-flicker.1" \
 		"$(DESTDIR)$(MANDIR)/man1/raybundle-report.1" \
 		"$(DESTDIR)$(MANDIR)/man5/raybundle-job.5" "$(DESTDIR)$(DATADIR)/ocio/config.ocio"
 

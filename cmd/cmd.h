@@ -18,6 +18,7 @@ int cmd_info(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
 int cmd_timing(int argc, char **argv);
 int cmd_report(int argc, char **argv);
+int cmd_flicker(int argc, char **argv);
 int cmd_help(int argc, char **argv);
 
 /* raybundle bench's runs, rendered by cmd/render.c for cmd/bench.c. */

@@ -19,6 +19,7 @@ static const struct command commands[] = {
     {"compare", cmd_compare, "compare two images or frame sequences: RMSE, relMSE, PSNR, ..."},
     {"bench", cmd_bench, "render a job N times, keeping every run's timing sidecars"},
     {"timing", cmd_timing, "'timing compare BASE NEW': per-pass regression test of two bench sets"},
+    {"flicker", cmd_flicker, "temporal stability of a sequence: warped and excess temporal error"},
     {"report", cmd_report,
      "write an HTML report of a rendered sequence: timing, error, thumbnails"},
     {"info", cmd_info, "list Vulkan devices, drivers and the features raybundle uses"},

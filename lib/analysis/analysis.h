@@ -18,6 +18,8 @@
 /* A mask or alpha value above this includes the pixel. */
 #define RB_ANALYSIS_MASK_THRESHOLD 0.5f
 #define RB_ANALYSIS_MAX_CHANNELS 4
+/* The most layers one rb_analysis_layers_read call extracts. */
+#define RB_ANALYSIS_MAX_LAYERS 8
 
 /* ---- layers ----------------------------------------------------------------------------- */
 
@@ -42,6 +44,14 @@ enum rb_status rb_analysis_layer_resolve(const char *name, struct rb_analysis_la
 enum rb_status rb_analysis_layer_extract(const struct rb_analysis_layer *layer,
                                          const struct rb_io_image *img, const char *path,
                                          float **out, struct rb_err *err);
+
+/* Reads the image at path and extracts the count layers names[] (as rb_analysis_layer_resolve
+ * names them) into out[i], each freed by the caller with free(), and its size into *width_px and
+ * *height_px. Everything is written only on success. Fails with the reader's status and message
+ * (RB_E_IO, RB_E_EXTERNAL), or as rb_analysis_layer_extract does for a missing layer. */
+enum rb_status rb_analysis_layers_read(const char *path, const char *const *names, size_t count,
+                                       float **out, uint32_t *width_px, uint32_t *height_px,
+                                       struct rb_err *err);
 
 /* ---- masks ------------------------------------------------------------------------------ */
 
@@ -247,9 +257,9 @@ enum rb_status rb_analysis_timing_compare_sets(const struct rb_analysis_timing_s
                                                struct rb_analysis_timing_row **rows,
                                                size_t *row_count, struct rb_err *err);
 
-/* ---- report (report.c) ------------------------------------------------------------------ */
+/* ---- sequences (report.c) --------------------------------------------------------------- */
 
-/* A frame sequence in a directory, as raybundle render and reference write one: STEM.NNNN.exr,
+/* A frame sequence, as raybundle render and reference write one into a directory: STEM.NNNN.exr,
  * each beside its STEM.NNNN.timing.json and, where the integrator keeps hit ratios, its
  * STEM.NNNN.hits.exr. */
 struct rb_analysis_sequence {
@@ -260,13 +270,100 @@ struct rb_analysis_sequence {
     size_t frame_count;
 };
 
-/* Finds the frames in dir: the files named STEM.DIGITS.exr (so not STEM.DIGITS.hits.exr).
- * Fails with RB_E_IO when dir cannot be read, RB_E_INVALID when it holds no frame, frames of two
- * stems (both named) or a frame twice (frame.1.exr and frame.0001.exr), RB_E_NOMEM. Release
- * *out with rb_analysis_sequence_release, also after a failure. */
-enum rb_status rb_analysis_sequence_scan(const char *dir, struct rb_analysis_sequence *out,
+/* Finds the frames of seq, a directory or a pattern DIR/STEM.####.exr (one run of '#', any
+ * length): in a directory, the files named STEM.DIGITS.exr (so not STEM.DIGITS.hits.exr), which
+ * must all share one STEM; with a pattern, only those of its STEM, other files left alone.
+ * Fails with RB_E_IO when the directory cannot be read, RB_E_INVALID for a malformed pattern,
+ * no frame, frames of two stems in a directory (both named) or a frame twice (frame.1.exr and
+ * frame.0001.exr), RB_E_NOMEM. Release *out with rb_analysis_sequence_release, also after a
+ * failure. */
+enum rb_status rb_analysis_sequence_scan(const char *seq, struct rb_analysis_sequence *out,
                                          struct rb_err *err);
 void rb_analysis_sequence_release(struct rb_analysis_sequence *s);
+/* The index of frame in s, or -1 when s does not have it. */
+long rb_analysis_sequence_find(const struct rb_analysis_sequence *s, int frame);
+
+/* ---- temporal stability (flicker.c) ----------------------------------------------------- */
+
+/* Log luminance is ln(max(Y, 0) + RB_ANALYSIS_FLICKER_LOG_EPSILON) by default, Y the Rec.709
+ * luminance 0.2126 R + 0.7152 G + 0.0722 B of the beauty: near-black noise stays bounded. */
+#define RB_ANALYSIS_FLICKER_LOG_EPSILON 1e-3
+/* The default disocclusion test: a previous pixel is the same surface when its depth is within
+ * this fraction of the current pixel's depth. */
+#define RB_ANALYSIS_FLICKER_DEPTH_TOLERANCE 0.05
+/* A static pixel: geometry in every frame, |motion.X| and |motion.Y| at most this many pixels,
+ * and depth within RB_ANALYSIS_FLICKER_STATIC_DEPTH_REL of its first frame's. */
+#define RB_ANALYSIS_FLICKER_STATIC_MOTION_PX 1e-3
+#define RB_ANALYSIS_FLICKER_STATIC_DEPTH_REL 1e-4
+
+struct rb_analysis_flicker_desc {
+    const char *seq;        /* SEQ: a directory or a pattern (rb_analysis_sequence_scan) */
+    const char *reference;  /* REFSEQ, the same job's reference sequence; NULL: none */
+    double log_epsilon;     /* 0: RB_ANALYSIS_FLICKER_LOG_EPSILON; never negative */
+    double depth_tolerance; /* relative; 0: RB_ANALYSIS_FLICKER_DEPTH_TOLERANCE; never negative */
+};
+
+/* A copy of in with the defaults filled in. */
+struct rb_analysis_flicker_desc
+rb_analysis_flicker_desc_resolve(const struct rb_analysis_flicker_desc *in);
+
+/* One frame of one sequence. Pixels without geometry (depth 0: no motion vector) or with a value
+ * that is not finite are in none of the counts. */
+struct rb_analysis_flicker_stats {
+    /* The warped temporal error: the mean over the compared pixels p of
+     * |l_t(p) - l_{t-1}(p + motion_t(p))|, l the log luminance, l_{t-1} sampled bilinearly;
+     * NaN for a frame whose frame - 1 is not in the sequence, or when no pixel was compared. */
+    double warped_error;
+    uint64_t compared_count;    /* pixels in warped_error */
+    uint64_t disoccluded_count; /* left out: the depth sampled there is another surface's (or a
+                                 * pixel the sample reads has no geometry) */
+    uint64_t offscreen_count;   /* left out: p + motion_t(p) is off the image */
+    /* The mean over the sequence's static pixels of (l_t(p) - mean over frames of l(p))^2;
+     * NaN when no pixel is static. */
+    double static_deviation;
+};
+
+struct rb_analysis_flicker_frame {
+    int frame;                            /* the sequence's own number */
+    struct rb_analysis_flicker_stats seq; /* the sequence */
+    struct rb_analysis_flicker_stats ref; /* the reference's same frame (NaN and 0 without) */
+    /* The excess temporal error: the mean over pixels of |(I_t - I_{t-1}) - (R_t - R_{t-1})|
+     * on luminance, I the sequence and R the reference; NaN without a reference or frame - 1. */
+    double excess_error;
+};
+
+/* A whole sequence: means over the frames that have a value (NaN where none has). */
+struct rb_analysis_flicker_summary {
+    double warped_error, warped_error_max;
+    uint64_t static_count; /* pixels static over the whole sequence */
+    /* The mean over the static pixels of the (population) variance of their log luminance over
+     * the frames: the mean of the frames' static_deviation. NaN when no pixel is static. */
+    double static_variance;
+};
+
+struct rb_analysis_flicker {
+    struct rb_analysis_sequence seq, ref; /* ref.frame_count is 0 without a reference */
+    struct rb_analysis_flicker_desc desc; /* resolved; its paths are borrowed from the caller's */
+    uint32_t width_px, height_px;
+    struct rb_analysis_flicker_frame *frames; /* seq.frame_count */
+    struct rb_analysis_flicker_summary summary, reference_summary;
+    double excess_error, excess_error_max; /* over frames; NaN without a reference */
+    bool has_reference;
+};
+
+/* Measures the temporal stability of desc->seq from its EXRs' beauty (R, G, B), motion
+ * (motion.X/Y: the previous position minus this one, in pixels) and depth (depth.Z) layers,
+ * and of the reference's same frames, which must all exist. Every frame is read twice (the
+ * static pixels are known only at the end); sums run in double in pixel and frame order, so
+ * the same files give the same bits. Fails with the readers' statuses and a message naming the
+ * file, RB_E_INVALID for a bad desc, a missing layer or frame, or frames of another size,
+ * RB_E_NOMEM; *out only on success. desc's strings must outlive *out. */
+enum rb_status rb_analysis_flicker_create(const struct rb_analysis_flicker_desc *desc,
+                                          struct rb_analysis_flicker **out, struct rb_err *err);
+/* Frees f and what it owns; NULL is fine. */
+void rb_analysis_flicker_destroy(struct rb_analysis_flicker *f);
+
+/* ---- report (report.c) ------------------------------------------------------------------ */
 
 /* The report page's fixed layout, in CSS pixels (raybundle-report(1)): the header, then one
  * section a chart, each a title and an SVG whose plot area is at (PLOT_X, PLOT_Y) inside it;
@@ -316,6 +413,7 @@ struct rb_analysis_report_frame {
     double reference_temporal_rmse; /* the same in the reference */
     double relmse;                  /* the beauty's relMSE against the reference's same frame */
     double hit_ratio;               /* the mean of the hit-ratio image's first channel */
+    double warped_error, reference_warped_error, excess_error; /* rb_analysis_flicker's */
     char *thumb, *reference_thumb, *hits_thumb; /* data: URIs; NULL when there is none */
 };
 
@@ -336,14 +434,17 @@ struct rb_analysis_report {
     size_t pass_count;
     struct rb_analysis_report_frame *frames; /* seq.frame_count */
     bool has_reference, has_hits;
+    char flicker_note[512]; /* why the flicker metrics are missing ("" when they are there) */
 };
 
 /* Reads every frame of desc->dir (its EXR's beauty, its timing sidecar, its hit-ratio image
  * when the sequence has them) and of the reference, and computes the report's series and
- * thumbnails. Every frame of the sequence needs a sidecar and, with a reference, the same
- * frame of the same size there; hit-ratio images are in every frame or in none. Fails with
- * the readers' statuses and a message naming the file, RB_E_INVALID for frames that do not
- * match, RB_E_NOMEM; *out only on success. */
+ * thumbnails; the warped and excess temporal errors come from rb_analysis_flicker_create, and
+ * where it cannot compute them (a sequence without motion or depth layers) its message goes in
+ * flicker_note instead of failing the report. Every frame of the sequence needs a sidecar and, with
+ * a reference, the same frame of the same size there; hit-ratio images are in every frame or in
+ * none. Fails with the readers' statuses and a message naming the file, RB_E_INVALID for frames
+ * that do not match, RB_E_NOMEM; *out only on success. */
 enum rb_status rb_analysis_report_create(const struct rb_analysis_report_desc *desc,
                                          struct rb_analysis_report **out, struct rb_err *err);
 void rb_analysis_report_destroy(struct rb_analysis_report *r);

@@ -100,6 +100,37 @@ enum rb_status rb_analysis_layer_extract(const struct rb_analysis_layer *layer,
     return RB_OK;
 }
 
+enum rb_status rb_analysis_layers_read(const char *path, const char *const *names, size_t count,
+                                       float **out, uint32_t *width_px, uint32_t *height_px,
+                                       struct rb_err *err)
+{
+    struct rb_io_image img = {0};
+    float *px[RB_ANALYSIS_MAX_LAYERS] = {0};
+    enum rb_status st;
+    if (count > RB_ANALYSIS_MAX_LAYERS)
+        return rb_errf(err, RB_E_INVALID, "'%s': %zu layers asked for, at most %d", path, count,
+                       RB_ANALYSIS_MAX_LAYERS);
+    if ((st = rb_io_image_read(path, &img, err)))
+        return st;
+    for (size_t i = 0; i < count && st == RB_OK; i++) {
+        struct rb_analysis_layer layer;
+        if (!(st = rb_analysis_layer_resolve(names[i], &layer, err)))
+            st = rb_analysis_layer_extract(&layer, &img, path, &px[i], err);
+    }
+    for (size_t i = 0; i < count; i++) {
+        if (st)
+            free(px[i]);
+        else
+            out[i] = px[i];
+    }
+    if (!st) {
+        *width_px = img.width_px;
+        *height_px = img.height_px;
+    }
+    rb_io_image_release(&img);
+    return st;
+}
+
 /* ---- masks ------------------------------------------------------------------------------ */
 
 void rb_analysis_mask_and(uint8_t *mask, size_t pixel_count, const float *values, size_t stride)

@@ -3,8 +3,9 @@
  * a reference sequence and the hit-ratio image's mean, thumbnails through the OCIO view; then one
  * self-contained HTML page with inline SVG charts drawn at fixed positions (raybundle-report(1)).
  * The numbers come from the readers and metrics the other commands use (rb_io_timing_read,
- * rb_analysis_compare); this file adds the layout. Plots whose data the sequence does not have
- * (hit ratios, motion-compensated flicker) say so in their place; nothing is made up. */
+ * rb_analysis_compare, rb_analysis_flicker_create); this file adds the layout. Plots whose data
+ * the sequence does not have (hit ratios; flicker without motion and depth layers) say so in
+ * their place; nothing is made up. */
 #include "analysis/analysis.h"
 
 #include <dirent.h>
@@ -104,19 +105,61 @@ static enum rb_status add_frame(struct rb_analysis_sequence *s, const char *name
     return RB_OK;
 }
 
-enum rb_status rb_analysis_sequence_scan(const char *dir, struct rb_analysis_sequence *out,
+/* Splits the pattern "DIR/STEM.###.exr" (one run of '#' for the frame number) into out's dir and
+ * stem; false, with out untouched, when seq's last component has no '#' (a directory). */
+static bool split_pattern(const char *seq, struct rb_analysis_sequence *out, enum rb_status *st,
+                          struct rb_err *err)
+{
+    const char *slash = strrchr(seq, '/'), *name = slash ? slash + 1 : seq;
+    char probe[sizeof(out->stem) + 16];
+    size_t stem_len, n = strlen(name);
+    int frame;
+    *st = RB_OK;
+    if (!strchr(name, '#'))
+        return false;
+    /* The name with its '#'s as digits must be a frame's name whose digits were all '#'. */
+    bool is_frame = n < sizeof(probe);
+    for (size_t i = 0; is_frame && i <= n; i++)
+        probe[i] = name[i] == '#' ? '0' : name[i];
+    is_frame = is_frame && frame_name(probe, &stem_len, &frame) && stem_len < sizeof(out->stem) &&
+               !memchr(name, '#', stem_len) &&
+               strspn(name + stem_len + 1, "#") == n - stem_len - 1 - strlen(".exr");
+    if (!is_frame) {
+        *st = rb_errf(err, RB_E_INVALID,
+                      "'%s' is neither a directory nor a pattern DIR/NAME.####.exr", seq);
+        return true;
+    }
+    size_t dir_len = slash ? (size_t)(slash - seq) : 0;
+    if (dir_len >= sizeof(out->dir)) {
+        *st = rb_errf(err, RB_E_INVALID, "directory '%.40s...' is too long", seq);
+        return true;
+    }
+    if (!slash)
+        rb_strlcpy(out->dir, ".", sizeof(out->dir));
+    else if (dir_len == 0)
+        rb_strlcpy(out->dir, "/", sizeof(out->dir));
+    else
+        memcpy(out->dir, seq, dir_len);
+    memcpy(out->stem, name, stem_len);
+    return true;
+}
+
+enum rb_status rb_analysis_sequence_scan(const char *seq, struct rb_analysis_sequence *out,
                                          struct rb_err *err)
 {
     memset(out, 0, sizeof(*out));
-    if (rb_strlcpy(out->dir, dir, sizeof(out->dir)) >= sizeof(out->dir))
-        return rb_errf(err, RB_E_INVALID, "directory '%.40s...' is too long", dir);
+    enum rb_status st = RB_OK;
+    bool is_pattern = split_pattern(seq, out, &st, err);
+    if (st)
+        return st;
+    if (!is_pattern && rb_strlcpy(out->dir, seq, sizeof(out->dir)) >= sizeof(out->dir))
+        return rb_errf(err, RB_E_INVALID, "directory '%.40s...' is too long", seq);
     size_t len = strlen(out->dir);
     while (len > 1 && out->dir[len - 1] == '/')
         out->dir[--len] = '\0';
     DIR *d = opendir(out->dir);
     if (!d)
         return rb_errf(err, RB_E_IO, "cannot open '%s': %s", out->dir, strerror(errno));
-    enum rb_status st = RB_OK;
     char other[256] = "";
     struct dirent *e;
     while (st == RB_OK && (e = readdir(d))) {
@@ -124,6 +167,11 @@ enum rb_status rb_analysis_sequence_scan(const char *dir, struct rb_analysis_seq
         int frame;
         if (!frame_name(e->d_name, &stem_len, &frame))
             continue;
+        if (is_pattern) { /* the pattern's frames alone */
+            if (strlen(out->stem) == stem_len && !strncmp(out->stem, e->d_name, stem_len))
+                st = add_frame(out, e->d_name, frame, err);
+            continue;
+        }
         if (stem_len >= sizeof(out->stem)) {
             st = rb_errf(err, RB_E_INVALID, "'%s/%s': the name is too long", out->dir, e->d_name);
             break;
@@ -145,6 +193,8 @@ enum rb_status rb_analysis_sequence_scan(const char *dir, struct rb_analysis_seq
     closedir(d);
     if (st)
         return st;
+    if (!out->frame_count && is_pattern)
+        return rb_errf(err, RB_E_INVALID, "no frames match '%s'", seq);
     if (!out->frame_count)
         return rb_errf(err, RB_E_INVALID, "'%s' holds no frames (files named NAME.####.exr)",
                        out->dir);
@@ -157,7 +207,7 @@ enum rb_status rb_analysis_sequence_scan(const char *dir, struct rb_analysis_seq
     return sort_frames(out, err);
 }
 
-static long find_frame(const struct rb_analysis_sequence *s, int frame)
+long rb_analysis_sequence_find(const struct rb_analysis_sequence *s, int frame)
 {
     for (size_t i = 0; i < s->frame_count; i++)
         if (s->frames[i] == frame)
@@ -227,20 +277,11 @@ struct beauty {
 
 static enum rb_status read_beauty(const char *path, struct beauty *out, struct rb_err *err)
 {
-    struct rb_io_image img = {0};
-    struct rb_analysis_layer layer;
-    enum rb_status st;
+    static const char *const beauty[] = {"beauty"};
     free(out->rgb);
     out->rgb = NULL;
-    if ((st = rb_analysis_layer_resolve("beauty", &layer, err)) ||
-        (st = rb_io_image_read(path, &img, err)) ||
-        (st = rb_analysis_layer_extract(&layer, &img, path, &out->rgb, err)))
-        goto out;
-    out->width_px = img.width_px;
-    out->height_px = img.height_px;
-out:
-    rb_io_image_release(&img);
-    return st;
+    return rb_analysis_layers_read(path, beauty, 1, &out->rgb, &out->width_px, &out->height_px,
+                                   err);
 }
 
 /* RMSE or relMSE of a against the reference b, the same size. */
@@ -399,7 +440,7 @@ static enum rb_status read_reference(const struct rb_analysis_report_desc *desc,
                                      struct beauty *prev, bool has_prev, struct rb_err *err)
 {
     struct rb_analysis_report_frame *f = &r->frames[i];
-    long k = find_frame(&r->ref, f->frame);
+    long k = rb_analysis_sequence_find(&r->ref, f->frame);
     if (k < 0)
         return rb_errf(err, RB_E_INVALID, "the reference '%s' has no frame %d (for '%s')",
                        r->ref.dir, f->frame, r->seq.paths[i]);
@@ -474,6 +515,30 @@ static enum rb_status read_frames(const struct rb_analysis_report_desc *desc,
     return st;
 }
 
+/* The flicker metrics of the same sequences, or the reason there are none in flicker_note. */
+static enum rb_status read_flicker(const struct rb_analysis_report_desc *desc,
+                                   struct rb_analysis_report *r, struct rb_err *err)
+{
+    struct rb_analysis_flicker *f = NULL;
+    struct rb_err why = RB_ERR_INIT;
+    enum rb_status st = rb_analysis_flicker_create(
+        &(struct rb_analysis_flicker_desc){.seq = desc->dir, .reference = desc->reference_dir}, &f,
+        &why);
+    if (st == RB_E_NOMEM)
+        return rb_errf(err, st, "%s", why.msg);
+    if (st) {
+        rb_strlcpy(r->flicker_note, why.msg, sizeof(r->flicker_note));
+        return RB_OK;
+    }
+    for (size_t i = 0; i < r->seq.frame_count; i++) {
+        r->frames[i].warped_error = f->frames[i].seq.warped_error;
+        r->frames[i].reference_warped_error = f->frames[i].ref.warped_error;
+        r->frames[i].excess_error = f->frames[i].excess_error;
+    }
+    rb_analysis_flicker_destroy(f);
+    return RB_OK;
+}
+
 enum rb_status rb_analysis_report_create(const struct rb_analysis_report_desc *desc,
                                          struct rb_analysis_report **out, struct rb_err *err)
 {
@@ -500,8 +565,11 @@ enum rb_status rb_analysis_report_create(const struct rb_analysis_report_desc *d
             .reference_temporal_rmse = NAN,
             .relmse = NAN,
             .hit_ratio = NAN,
+            .warped_error = NAN,
+            .reference_warped_error = NAN,
+            .excess_error = NAN,
         };
-    if ((st = read_frames(desc, r, err)))
+    if ((st = read_frames(desc, r, err)) || (st = read_flicker(desc, r, err)))
         goto fail;
     *out = r;
     return RB_OK;
@@ -881,10 +949,20 @@ static void page(FILE *f, const struct rb_analysis_report *r)
           "Frame-to-frame difference (RMSE of the beauty against the previous frame; "
           "motion counts)",
           temporal, r->has_reference ? 2 : 1, "", 0.0);
-    chart_none(f, chart++, "warped", "Warped and excess temporal error",
-               "Not computed: the warped temporal error and its excess over the reference's need "
-               "motion-compensated flicker metrics, which this version does not have. The plain "
-               "frame-to-frame difference above counts motion as change.");
+    const struct series warped[] = {
+        {"sequence", "#4e79a7", FIELD(warped_error)},
+        {"reference", "#59a14f", FIELD(reference_warped_error)},
+        {"excess", "#e15759", FIELD(excess_error)},
+    };
+    char note[600];
+    snprintf(note, sizeof(note), "Not computed: %s.", r->flicker_note);
+    if (*r->flicker_note)
+        chart_none(f, chart++, "warped", "Warped and excess temporal error", note);
+    else
+        lines(f, r, chart++, "warped",
+              "Warped temporal error (log luminance, motion-compensated) and excess over the "
+              "reference (raybundle flicker)",
+              warped, r->has_reference ? 3 : 1, "", 0.0);
     const struct series relmse[] = {{"relMSE", "#e15759", FIELD(relmse)}};
     if (r->has_reference)
         lines(f, r, chart++, "reference-error",

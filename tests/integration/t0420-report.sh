@@ -52,11 +52,19 @@ check "every src is an inline PNG" \
     test "$(grep -o 'src="[^"]*' "$page" | grep -vc '^src="data:image/png;base64,')" -eq 0
 check "8 thumbnails: the sequence's and the reference's" \
     test "$(grep -o '<img src="data:image/png;base64,' "$page" | wc -l)" -eq 8
-for id in passes frame-time temporal reference-error; do
+for id in passes frame-time temporal warped reference-error; do
     check "the page plots '$id'" grep -q "<section id=\"$id\".*" "$page"
 done
 check "the page says there are no hit ratios" grep -q 'No hit-ratio images' "$page"
-check "the page says the warped error is not computed" grep -q 'id="warped"' "$page"
+# The warped and excess errors are raybundle flicker's, to the page's 4 digits.
+rb flicker "$T/seq" --reference "$T/ref" --csv
+for f in 1 2 3; do
+    for col in "2 sequence" "7 excess" "8 reference"; do
+        want=$(awk -F, -v f=$f -v c="${col% *}" '$1 == f { printf "%.4g", $c }' "$T/stdout")
+        check "frame $f's warped-chart '${col#* }' is flicker's ($want)" \
+            grep -q "<title>frame $f: ${col#* } $want</title>" "$page"
+    done
+done
 # The relMSE under each thumbnail is raybundle compare's, to the page's 4 digits.
 rb compare "$T/seq/frame.####.exr" "$T/ref/frame.####.exr" --frames 0-3 --json
 expect_exit 0 "compare the same sequences"
@@ -193,7 +201,7 @@ color() {
 plot() {
     section "$1" | sed -n 's/.* data-plot="\([^"]*\)".*/\1/p'
 }
-for chart in "passes shadow" "frame-time frame wall" "temporal sequence" \
+for chart in "passes shadow" "frame-time frame wall" "temporal sequence" "warped excess" \
     "reference-error relMSE"; do
     id=${chart%% *}
     series=${chart#* }

@@ -392,6 +392,9 @@ static void test_report_page(void **state)
     }
     assert_non_null(strstr(page, "No hit-ratio images"));
     assert_non_null(strstr(page, "No reference given"));
+    /* These frames have no motion layer: the flicker chart says what is missing. */
+    assert_non_null(strstr(page, "<p class=\"none\">Not computed: &#39;"));
+    assert_non_null(strstr(page, "has no layer &#39;motion&#39;"));
     /* The pass chart, worked from the layout: its plot area starts 160 + 30 + 12 = 202 down and
      * 72 across, 640 x 176. The tallest bar is frame 4's 3 + 4 + 0.5 = 7.5 ms, so the axis runs
      * to 8 ms in steps of 2. Frame 4 is the 4th of 4 slots, each 160 wide: centre 72 + 3.5 160 =
