@@ -21,6 +21,7 @@ layout(std430, binding = RB_BIND_BDPT_BOUNCE_PROBE_VIEWS) readonly buffer ProbeV
 layout(binding = RB_BIND_BDPT_BOUNCE_PROBE_POSITION, rgba32f) uniform readonly image2DArray probe_position;
 layout(binding = RB_BIND_BDPT_BOUNCE_PROBE_NORMAL, rgba32f) uniform readonly image2DArray probe_normal;
 layout(binding = RB_BIND_BDPT_BOUNCE_PROBE_MATERIAL, rg32ui) uniform readonly uimage2DArray probe_material;
+layout(std430, binding = RB_BIND_BDPT_BOUNCE_VPL_DRAWS) writeonly buffer VplDraws { uint vpl_draws[]; };
 layout(push_constant) uniform Push { rb_gpu_bdpt_bounce_push pc; };
 
 void main()
@@ -52,5 +53,6 @@ void main()
         }
     }
     vpls[count + i] = o;
+    vpl_draws[(count + i) * RB_BDPT_DRAW_UINTS + RB_BDPT_DRAW_INSTANCES] = o.position.w > 0.0 ? 1u : 0u;
     vpl_views[count + i] = vpl_view(o.position.xyz, o.normal.xyz, pc.scene.w);
 }

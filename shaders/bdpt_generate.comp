@@ -40,6 +40,8 @@ layout(binding = RB_BIND_BDPT_GENERATE_SRGB_TEXTURES) uniform sampler2DArray srg
 layout(binding = RB_BIND_BDPT_GENERATE_LINEAR_TEXTURES) uniform sampler2DArray linear_textures;
 layout(std430, binding = RB_BIND_BDPT_GENERATE_EMIT_INFO) writeonly buffer EmitInfo { rb_gpu_bdpt_emit_info emit_info; };
 layout(std430, binding = RB_BIND_BDPT_GENERATE_PROBE_VIEWS) writeonly buffer ProbeViews { rb_gpu_view probe_views[]; };
+layout(std430, binding = RB_BIND_BDPT_GENERATE_VPL_DRAWS) writeonly buffer VplDraws { uint vpl_draws[]; };
+layout(std430, binding = RB_BIND_BDPT_GENERATE_PROBE_DRAWS) writeonly buffer ProbeDraws { uint probe_draws[]; };
 layout(push_constant) uniform Push { rb_gpu_bdpt_generate_push pc; };
 
 float luminance(vec3 c)
@@ -250,13 +252,17 @@ void vpl(uint i)
     vec3 n = o.normal.xyz;
     vpl_views[i] = vpl_view(o.position.xyz, n, pc.scene.w);
     // An emitter's point also probes, along a cosine-distributed direction, for the surface
-    // its emission reaches first: the bounce VPL (bdpt_bounce.comp). Other VPLs' probes are
-    // empty: every corner at the clip origin, nothing drawn.
+    // its emission reaches first: the bounce VPL (bdpt_bounce.comp). Other VPLs' probes draw
+    // nothing (and their views are empty: every corner at the clip origin). A VPL without a
+    // surface draws no map.
+    vpl_draws[i * RB_BDPT_DRAW_UINTS + RB_BDPT_DRAW_INSTANCES] = o.position.w > 0.0 ? 1u : 0u;
     rb_gpu_view probe;
     probe.transform = mat4(0.0);
     probe.origin = vec4(0.0);
     probe.axis = vec4(0.0);
-    if (uint(o.from.w) == RB_BDPT_VPL_EMITTER && o.position.w > 0.0) {
+    bool probes = uint(o.from.w) == RB_BDPT_VPL_EMITTER && o.position.w > 0.0;
+    probe_draws[i * RB_BDPT_DRAW_UINTS + RB_BDPT_DRAW_INSTANCES] = probes ? 1u : 0u;
+    if (probes) {
         float far = vpl_far(pc.scene.w);
         probe = probe_view(o.position.xyz + n * vpl_lift(pc.scene.w),
                            cosine_direction(n, samples[i].v.xy), 1e-4 * far, far);

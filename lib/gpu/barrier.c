@@ -39,6 +39,7 @@ static const struct {
     [RB_GPU_FRAGMENT_READ_WRITE] = {STAGE(FRAGMENT_SHADER),
                                     ACCESS(SHADER_STORAGE_READ) | ACCESS(SHADER_STORAGE_WRITE)},
     [RB_GPU_INDEX_READ] = {STAGE(INDEX_INPUT), ACCESS(INDEX_READ)},
+    [RB_GPU_INDIRECT_READ] = {STAGE(DRAW_INDIRECT), ACCESS(INDIRECT_COMMAND_READ)},
     /* a cleared attachment: the clear and the draws write, nothing blends */
     [RB_GPU_COLOR_ATTACHMENT] = {STAGE(COLOR_ATTACHMENT_OUTPUT), ACCESS(COLOR_ATTACHMENT_WRITE)},
     /* a cleared depth attachment, tested and written in either fragment-test stage */

@@ -197,6 +197,7 @@ enum rb_gpu_use {
     RB_GPU_FRAGMENT_SAMPLED,    /* sampled image, fragment shader */
     RB_GPU_FRAGMENT_READ_WRITE, /* storage, read and written by a fragment shader (lists) */
     RB_GPU_INDEX_READ,          /* index buffer */
+    RB_GPU_INDIRECT_READ,       /* indirect draw commands */
     RB_GPU_COLOR_ATTACHMENT,    /* cleared and drawn into */
     RB_GPU_DEPTH_ATTACHMENT,    /* cleared, tested and written */
     RB_GPU_TRANSFER_READ,       /* source of a copy */

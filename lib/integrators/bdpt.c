@@ -37,9 +37,10 @@ static uint32_t history_frames(const struct rb_job *job)
 static void release(struct rb_gpu *gpu, struct bdpt *d)
 {
     struct rb_bdpt_frame *b = &d->b;
-    struct rb_gpu_buffer *buffers[] = {
-        &b->bounds,      &b->samples,      &b->lights,   &b->vpls,      &b->vpl_views,
-        &b->probe_views, &b->bundle_views, &b->emitters, &b->emit_info, &d->usage};
+    struct rb_gpu_buffer *buffers[] = {&b->bounds,    &b->samples,     &b->lights,
+                                       &b->vpls,      &b->vpl_views,   &b->probe_views,
+                                       &b->vpl_draws, &b->probe_draws, &b->bundle_views,
+                                       &b->emitters,  &b->emit_info,   &d->usage};
     for (size_t i = 0; i < COUNT(buffers); i++)
         rb_gpu_buffer_release(gpu, buffers[i]);
     for (int i = 0; i < RB_VIEW_RSM_TARGETS; i++) {
@@ -73,6 +74,8 @@ static void destroy(struct rb_integrator *it, void *state)
 
 /* The integrator's buffers are storage buffers, filled by the shaders or uploaded. */
 #define STORAGE (VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT)
+/* Draw commands the shaders edit. */
+#define DRAWS (STORAGE | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT)
 
 /* The fixed quasi-random table (BDPT.md "Sampling"): VPL i draws its light and its direction
  * from rows i, bundle i its direction from row K_v + i. */
@@ -172,6 +175,12 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
                               "bdpt.vpl_views", &b->vpl_views, err)) ||
         (st = rb_frame_buffer(gpu, kv * sizeof(struct rb_gpu_view), STORAGE, false,
                               "bdpt.probe_views", &b->probe_views, err)) ||
+        (st = rb_frame_buffer(gpu, all * sizeof(VkDrawIndexedIndirectCommand), DRAWS, false,
+                              "bdpt.vpl_draws", &b->vpl_draws, err)) ||
+        (st = rb_frame_buffer(gpu, kv * sizeof(VkDrawIndexedIndirectCommand), DRAWS, false,
+                              "bdpt.probe_draws", &b->probe_draws, err)) ||
+        (st = rb_view_draws_init(gpu, &it->frame, true, all, &b->vpl_draws, err)) ||
+        (st = rb_view_draws_init(gpu, &it->frame, true, kv, &b->probe_draws, err)) ||
         (st = rb_frame_buffer(gpu, kb * sizeof(struct rb_gpu_view), STORAGE, false,
                               "bdpt.bundle_views", &b->bundle_views, err)) ||
         (st = rb_frame_buffer(gpu, kb * sizeof(struct rb_gpu_list_counter), STORAGE, true,
@@ -416,6 +425,7 @@ static void record_bounce(struct rb_integrator *it, struct bdpt *d, VkCommandBuf
     const struct rb_gpu_access probe[] = {
         {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
         {.buffer = &b->probe_views, .use = RB_GPU_GRAPHICS_READ},
+        {.buffer = &b->probe_draws, .use = RB_GPU_INDIRECT_READ},
         {.buffer = view_indices(frame), .use = RB_GPU_INDEX_READ},
         {.buffer = &frame->materials, .use = RB_GPU_FRAGMENT_READ},
         {.image = &frame->srgb_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
@@ -436,6 +446,7 @@ static void record_bounce(struct rb_integrator *it, struct bdpt *d, VkCommandBuf
                             .targets = {&b->probe[0], &b->probe[1], &b->probe[2], &b->probe[3]},
                             .depth = &b->probe_depth,
                             .use_simplified = true,
+                            .draws = &b->probe_draws,
                         });
     rb_integrator_pass_end(it, cmd);
 
@@ -446,6 +457,7 @@ static void record_bounce(struct rb_integrator *it, struct bdpt *d, VkCommandBuf
         {.image = &b->probe[0], .use = RB_GPU_COMPUTE_READ},
         {.image = &b->probe[1], .use = RB_GPU_COMPUTE_READ},
         {.image = &b->probe[3], .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &b->vpl_draws, .use = RB_GPU_COMPUTE_WRITE},
     };
     rb_integrator_pass_begin(it, cmd, "bounce", bounce, COUNT(bounce));
     rb_pass_bdpt_bounce_record(d->passes, cmd, b);
@@ -561,6 +573,8 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
         {.image = &frame->linear_textures, .use = RB_GPU_COMPUTE_SAMPLED},
         {.buffer = &b->emit_info, .use = RB_GPU_COMPUTE_WRITE},
         {.buffer = &b->probe_views, .use = RB_GPU_COMPUTE_WRITE},
+        {.buffer = &b->vpl_draws, .use = RB_GPU_COMPUTE_WRITE},
+        {.buffer = &b->probe_draws, .use = RB_GPU_COMPUTE_WRITE},
     };
     rb_integrator_pass_begin(it, cmd, "generate", generate, COUNT(generate));
     rb_pass_bdpt_generate_record(d->passes, cmd, frame, ctx->cur, b);
@@ -572,6 +586,7 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
         const struct rb_gpu_access vpl[] = {
             {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
             {.buffer = &b->vpl_views, .use = RB_GPU_GRAPHICS_READ},
+            {.buffer = &b->vpl_draws, .use = RB_GPU_INDIRECT_READ},
             {.buffer = view_indices(frame), .use = RB_GPU_INDEX_READ},
             {.image = &b->vpl_maps, .use = RB_GPU_COLOR_ATTACHMENT},
             {.image = &b->vpl_depth, .use = RB_GPU_DEPTH_ATTACHMENT},
@@ -586,6 +601,7 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
                                 .targets = {&b->vpl_maps},
                                 .depth = &b->vpl_depth,
                                 .use_simplified = true,
+                                .draws = &b->vpl_draws,
                             });
         rb_integrator_pass_end(it, cmd);
     }

@@ -43,6 +43,8 @@ static const struct rb_pass_binding generate_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_LINEAR_TEXTURES, COMBINED_IMAGE_SAMPLER),
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_EMIT_INFO, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_PROBE_VIEWS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_GENERATE_VPL_DRAWS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_GENERATE_PROBE_DRAWS, STORAGE_BUFFER),
 };
 _Static_assert(COUNT(generate_bindings) == RB_BIND_BDPT_GENERATE_COUNT, "generate bindings");
 
@@ -53,6 +55,7 @@ static const struct rb_pass_binding bounce_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_PROBE_POSITION, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_PROBE_NORMAL, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_PROBE_MATERIAL, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_VPL_DRAWS, STORAGE_BUFFER),
 };
 _Static_assert(COUNT(bounce_bindings) == RB_BIND_BDPT_BOUNCE_COUNT, "bounce bindings");
 
@@ -237,6 +240,8 @@ void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                        p->generate.gpu->linear_sampler);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_EMIT_INFO, &b->emit_info);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_PROBE_VIEWS, &b->probe_views);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_VPL_DRAWS, &b->vpl_draws);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_PROBE_DRAWS, &b->probe_draws);
     rb_pass_record_bindings(cmd, &bind);
     struct rb_gpu_bdpt_generate_push pc = {
         .counts = {b->vpl_count, b->bundle_count, frame->light_count, b->rsm[0].width_px},
@@ -259,6 +264,7 @@ void rb_pass_bdpt_bounce_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     rb_pass_bind_image(&bind, RB_BIND_BDPT_BOUNCE_PROBE_POSITION, b->probe[0].view, VK_NULL_HANDLE);
     rb_pass_bind_image(&bind, RB_BIND_BDPT_BOUNCE_PROBE_NORMAL, b->probe[1].view, VK_NULL_HANDLE);
     rb_pass_bind_image(&bind, RB_BIND_BDPT_BOUNCE_PROBE_MATERIAL, b->probe[3].view, VK_NULL_HANDLE);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_BOUNCE_VPL_DRAWS, &b->vpl_draws);
     rb_pass_record_bindings(cmd, &bind);
     struct rb_gpu_bdpt_bounce_push pc = {
         .counts = {b->vpl_count, 0, 0, 0},

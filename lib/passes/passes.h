@@ -187,7 +187,20 @@ struct rb_view_batch {
      * when the frame has none). Off by default: the shadow pass and full-size views keep the
      * full mesh, bit for bit. */
     bool use_simplified;
+
+    /* When set, view i draws the VkDrawIndexedIndirectCommand at index first_view + i of this
+     * buffer (rb_view_draws_init fills them; a shader before the batch may set a view's
+     * instance count to 0, so that a view with nothing to see costs its clear alone). */
+    const struct rb_gpu_buffer *draws;
 };
+
+/* How many indices a batch draws (use_simplified as in struct rb_view_batch). */
+uint32_t rb_view_index_count(const struct rb_frame *frame, bool use_simplified);
+/* count draw commands into out (created with VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, storage and
+ * transfer destination): each draws the whole mesh once. */
+enum rb_status rb_view_draws_init(struct rb_gpu *gpu, const struct rb_frame *frame,
+                                  bool use_simplified, uint32_t count, struct rb_gpu_buffer *out,
+                                  struct rb_err *err);
 
 struct rb_pass_view;
 /* Builds a pipeline for each variant of desc. Fails with RB_E_UNSUPPORTED for a pair this pass
@@ -291,6 +304,8 @@ struct rb_bdpt_frame {
     struct rb_gpu_buffer vpls;         /* struct rb_gpu_vpl [K_v], [2 K_v] with bounces */
     struct rb_gpu_buffer vpl_views;    /* struct rb_gpu_view, as vpls: paraboloid */
     struct rb_gpu_buffer probe_views;  /* struct rb_gpu_view [K_v]: perspective, 1x1 */
+    struct rb_gpu_buffer vpl_draws;    /* VkDrawIndexedIndirectCommand, as vpls */
+    struct rb_gpu_buffer probe_draws;  /* VkDrawIndexedIndirectCommand [K_v] */
     struct rb_gpu_buffer bundle_views; /* struct rb_gpu_view [K_b]: orthographic */
     struct rb_gpu_buffer emitters;     /* struct rb_gpu_bdpt_emitter [emitter_count] */
     struct rb_gpu_buffer emit_info;    /* struct rb_gpu_bdpt_emit_info */

@@ -308,7 +308,7 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
     /* The simplified mesh when asked for and the frame has one; the full mesh otherwise. */
     bool is_simplified = batch->use_simplified && frame->view_indices.buffer;
     const struct rb_gpu_buffer *indices = is_simplified ? &frame->view_indices : &frame->indices;
-    uint32_t index_count = is_simplified ? frame->view_index_count : frame->index_count;
+    uint32_t index_count = rb_view_index_count(frame, batch->use_simplified);
     if (index_count)
         vkCmdBindIndexBuffer(cmd, indices->buffer, 0, VK_INDEX_TYPE_UINT32);
     VkViewport vp = {0, 0, (float)width, (float)height, 0.0f, 1.0f};
@@ -359,7 +359,12 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
                            &push);
         vkCmdSetViewport(cmd, 0, 1, &vp);
         vkCmdSetScissor(cmd, 0, 1, &area);
-        if (index_count) /* an empty scene still clears its layers */
+        if (index_count && batch->draws) /* an empty scene still clears its layers */
+            vkCmdDrawIndexedIndirect(cmd, batch->draws->buffer,
+                                     (VkDeviceSize)(batch->first_view + i) *
+                                         sizeof(VkDrawIndexedIndirectCommand),
+                                     1, sizeof(VkDrawIndexedIndirectCommand));
+        else if (index_count)
             vkCmdDrawIndexed(cmd, index_count, 1, 0, 0, 0);
         vkCmdEndRendering(cmd);
     }
@@ -370,6 +375,27 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
                               VK_ACCESS_2_HOST_READ_BIT);
     if (p->gpu->end_label)
         p->gpu->end_label(cmd);
+}
+
+uint32_t rb_view_index_count(const struct rb_frame *frame, bool use_simplified)
+{
+    return use_simplified && frame->view_indices.buffer ? frame->view_index_count
+                                                        : frame->index_count;
+}
+
+enum rb_status rb_view_draws_init(struct rb_gpu *gpu, const struct rb_frame *frame,
+                                  bool use_simplified, uint32_t count, struct rb_gpu_buffer *out,
+                                  struct rb_err *err)
+{
+    VkDrawIndexedIndirectCommand *c = calloc(count ? count : 1, sizeof(*c));
+    if (!c)
+        return rb_errf(err, RB_E_NOMEM, "out of memory for %u draw commands", count);
+    for (uint32_t i = 0; i < count; i++)
+        c[i] = (VkDrawIndexedIndirectCommand){
+            .indexCount = rb_view_index_count(frame, use_simplified), .instanceCount = 1};
+    enum rb_status st = rb_gpu_buffer_upload(gpu, out, c, (VkDeviceSize)count * sizeof(*c), err);
+    free(c);
+    return st;
 }
 
 void rb_pass_view_destroy(struct rb_pass_view *p)

@@ -62,6 +62,13 @@ struct rb_gpu_bdpt_sample {
     RB_VEC4(v); /* VPL: two for the direction of an emitter point's bounce; z, w unused */
 };
 
+/* The draw commands of the VPL maps and probes are VkDrawIndexedIndirectCommand, five uints;
+ * generate and bounce set the instance count, 1 for a view that sees something and 0 for one
+ * whose VPL has no surface (or whose probe has no emitter), so that it costs its clear alone.
+ * RB_BDPT_DRAW_INSTANCES: the instance count's uint in a command. */
+#define RB_BDPT_DRAW_UINTS 5
+#define RB_BDPT_DRAW_INSTANCES 1
+
 /* Push constants of bdpt_generate.comp. */
 struct rb_gpu_bdpt_generate_push {
     RB_UVEC4(counts);  /* VPLs, bundles, light count, RSM size in texels */

@@ -76,7 +76,9 @@
 #define RB_BIND_BDPT_GENERATE_LINEAR_TEXTURES 15
 #define RB_BIND_BDPT_GENERATE_EMIT_INFO 16 /* written: rb_gpu_bdpt_emit_info */
 #define RB_BIND_BDPT_GENERATE_PROBE_VIEWS 17 /* written: an emitter VPL's probe, perspective */
-#define RB_BIND_BDPT_GENERATE_COUNT 18
+#define RB_BIND_BDPT_GENERATE_VPL_DRAWS 18   /* written: instance counts, VPLs 0..K_v - 1 */
+#define RB_BIND_BDPT_GENERATE_PROBE_DRAWS 19 /* written: instance counts */
+#define RB_BIND_BDPT_GENERATE_COUNT 20
 
 /* bdpt_bounce.comp: the bounces of the emitters' VPLs, from their probes */
 #define RB_BIND_BDPT_BOUNCE_VPLS 0 /* read (VPL i), written (VPL K_v + i) */
@@ -85,7 +87,8 @@
 #define RB_BIND_BDPT_BOUNCE_PROBE_POSITION 3
 #define RB_BIND_BDPT_BOUNCE_PROBE_NORMAL 4
 #define RB_BIND_BDPT_BOUNCE_PROBE_MATERIAL 5
-#define RB_BIND_BDPT_BOUNCE_COUNT 6
+#define RB_BIND_BDPT_BOUNCE_VPL_DRAWS 6 /* written: instance counts, VPLs K_v..2 K_v - 1 */
+#define RB_BIND_BDPT_BOUNCE_COUNT 7
 
 /* bdpt_split.comp: the G-buffer into n x n sub-images */
 #define RB_BIND_BDPT_SPLIT_GB_POSITION 0

@@ -456,6 +456,42 @@ static void test_orthographic_depth(void **state)
     assert_true(checked > 0.97 * W * H * VIEWS);
     assert_true(box_pixels > 300);
 
+    /* The same batch with indirect draws from rb_view_draws_init, the middle view's instance
+     * count set to 0 as a shader would: the others draw the same bits, it stays cleared. */
+    float *direct = malloc((size_t)W * H * VIEWS * sizeof(float));
+    assert_non_null(direct);
+    memcpy(direct, got, (size_t)W * H * VIEWS * sizeof(float));
+    struct rb_gpu_buffer draws = {0};
+    struct rb_err err = RB_ERR_INIT;
+    make_buffer(g.gpu, VIEWS * sizeof(VkDrawIndexedIndirectCommand),
+                VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, "draws",
+                &draws);
+    check_ok(rb_view_draws_init(g.gpu, &g.frame, false, VIEWS, &draws, &err), &err);
+    VkDrawIndexedIndirectCommand *cmds = draws.mapped;
+    assert_int_equal(cmds[2].indexCount, g.frame.index_count);
+    assert_int_equal(cmds[2].instanceCount, 1);
+    cmds[1].instanceCount = 0;
+    run_batch(&g, p,
+              &(struct rb_view_batch){.kind = RB_VIEW_KIND_ORTHOGRAPHIC,
+                                      .output = RB_VIEW_OUTPUT_DEPTH,
+                                      .views = &view_buf,
+                                      .view_count = VIEWS,
+                                      .targets = {&target},
+                                      .depth = &depth,
+                                      .draws = &draws},
+              (const struct rb_gpu_image *[]){&target}, &out, 1);
+    size_t layer = (size_t)W * H, same = 0, cleared = 0;
+    for (size_t i = 0; i < layer * VIEWS; i++) {
+        if (i / layer == 1)
+            cleared += got[i] == FAR_CLEAR;
+        else
+            same += memcmp(&got[i], &direct[i], sizeof(float)) == 0;
+    }
+    assert_int_equal(same, 2 * layer);
+    assert_int_equal(cleared, layer);
+    free(direct);
+    rb_gpu_buffer_release(g.gpu, &draws);
+
     rb_pass_view_destroy(p);
     rb_gpu_buffer_release(g.gpu, &out);
     rb_gpu_image_release(g.gpu, &depth);
