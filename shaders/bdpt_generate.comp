@@ -42,33 +42,15 @@ layout(std430, binding = RB_BIND_BDPT_GENERATE_EMIT_INFO) writeonly buffer EmitI
 layout(std430, binding = RB_BIND_BDPT_GENERATE_PROBE_VIEWS) writeonly buffer ProbeViews { rb_gpu_view probe_views[]; };
 layout(std430, binding = RB_BIND_BDPT_GENERATE_VPL_DRAWS) writeonly buffer VplDraws { uint vpl_draws[]; };
 layout(std430, binding = RB_BIND_BDPT_GENERATE_PROBE_DRAWS) writeonly buffer ProbeDraws { uint probe_draws[]; };
+layout(std430, binding = RB_BIND_BDPT_GENERATE_EMITTER_CDF) readonly buffer Cdf { float cdf[]; };
 layout(push_constant) uniform Push { rb_gpu_bdpt_generate_push pc; };
 
-float luminance(vec3 c)
-{
-    return dot(max(c, vec3(0.0)), vec3(0.2126, 0.7152, 0.0722));
-}
+#include "bdpt_emitters.glsl"
 
-// Emissive triangle e's area times the luminance of its emissive factor: its share of the
-// emitters' power (as the reference weighs them).
-float emitter_weight(uint e, out vec3 p0, out vec3 p1, out vec3 p2)
-{
-    uvec4 t = emitters[e].tri;
-    p0 = vertices[t.x].position.xyz;
-    p1 = vertices[t.y].position.xyz;
-    p2 = vertices[t.z].position.xyz;
-    float area = 0.5 * length(cross(p1 - p0, p2 - p0));
-    return area * luminance(materials[t.w].emissive.rgb);
-}
-
-// S: the sum of emitter_weight, in one fixed order, so every invocation gets the same bits.
+// S, the emitters' summed weight: the end of bdpt_emitters.comp's CDF.
 float emitter_sum()
 {
-    float sum = 0.0;
-    vec3 p0, p1, p2;
-    for (uint e = 0u; e < uint(pc.sizes.w); e++)
-        sum += emitter_weight(e, p0, p1, p2);
-    return sum;
+    return cdf[uint(pc.sizes.w) - 1u];
 }
 
 float unordered(uint u)
@@ -128,18 +110,22 @@ rb_gpu_vpl emitter_vpl(vec3 u, float p_e, float sum)
     o.power = vec4(0.0);
     o.from = vec4(0.0, 0.0, 0.0, float(RB_BDPT_VPL_EMITTER));
     o.material = uvec4(0u, 0u, 0xffffffffu, 0u);
-    float target = u.x * sum, cum = 0.0;
-    uint e = 0u, count = uint(pc.sizes.w);
-    vec3 p0, p1, p2;
-    float w = emitter_weight(0u, p0, p1, p2);
-    while (e + 1u < count && !(w > 0.0 && target < cum + w)) {
-        cum += w;
-        e++;
-        w = emitter_weight(e, p0, p1, p2);
+    // The first triangle whose running sum passes the target: a binary search of the CDF.
+    float target = u.x * sum;
+    uint lo = 0u, hi = uint(pc.sizes.w) - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (cdf[mid] > target)
+            hi = mid;
+        else
+            lo = mid + 1u;
     }
+    uint e = lo;
+    vec3 p0, p1, p2;
+    float cum = e > 0u ? cdf[e - 1u] : 0.0, w = emitter_weight(e, p0, p1, p2);
     if (!(w > 0.0))
         return o;
-    float rest = clamp((target - cum) / w, 0.0, 1.0);
+    float rest = clamp((target - cum) / max(cdf[e] - cum, 1e-30), 0.0, 1.0);
     float su = sqrt(u.y), b1 = su * (1.0 - u.z), b2 = su * u.z, b0 = 1.0 - b1 - b2;
     uvec4 t = emitters[e].tri;
     vec3 n = normalize(cross(p1 - p0, p2 - p0)) * (rest < 0.5 ? 1.0 : -1.0);

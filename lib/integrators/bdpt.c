@@ -1,15 +1,14 @@
 /* The bdpt integrator (seed 000; DESIGN.md "bdpt", BDPT.md): direct's frame, then
- *   rsm -> bounds -> generate -> [probe -> bounce] -> vpl -> split -> (bundle k -> connect k)
- *   for each k -> gather -> filter -> output.
- * Reflective shadow maps of the shadowed punctual lights give the VPLs' surfaces; the emissive
- * triangles give VPLs too, points on them picked by power, which light the camera's points
- * directly (weighed against the bundles that find the emitter) and, through a bundle, one
- * bounce further; each such point probes along a cosine-distributed direction (a 1x1
- * reflective shadow map) for the surface its light meets first, VPL K_v + i, which gives the
- * emitter's light its bounces as a punctual light's VPL does. Each VPL gets a paraboloid
- * shadow map; each global ray-bundle is an orthographic view into per-pixel linked lists,
- * connected to the sub-image of the interleaved G-buffer it lights before the next one reuses
- * the list. Its history is direct's: one frame, for motion vectors. */
+ *   rsm -> bounds -> [emitters] -> generate -> [probe -> bounce] -> vpl -> split -> (bundle k ->
+ * connect k) for each k -> gather -> filter -> output. Reflective shadow maps of the shadowed
+ * punctual lights give the VPLs' surfaces; the emissive triangles give VPLs too, points on them
+ * picked by power, which light the camera's points directly (weighed against the bundles that find
+ * the emitter) and, through a bundle, one bounce further; each such point probes along a
+ * cosine-distributed direction (a 1x1 reflective shadow map) for the surface its light meets first,
+ * VPL K_v + i, which gives the emitter's light its bounces as a punctual light's VPL does. Each VPL
+ * gets a paraboloid shadow map; each global ray-bundle is an orthographic view into per-pixel
+ * linked lists, connected to the sub-image of the interleaved G-buffer it lights before the next
+ * one reuses the list. Its history is direct's: one frame, for motion vectors. */
 #include "integrators/integrators_int.h"
 
 #include <math.h>
@@ -37,10 +36,10 @@ static uint32_t history_frames(const struct rb_job *job)
 static void release(struct rb_gpu *gpu, struct bdpt *d)
 {
     struct rb_bdpt_frame *b = &d->b;
-    struct rb_gpu_buffer *buffers[] = {&b->bounds,    &b->samples,     &b->lights,
-                                       &b->vpls,      &b->vpl_views,   &b->probe_views,
-                                       &b->vpl_draws, &b->probe_draws, &b->bundle_views,
-                                       &b->emitters,  &b->emit_info,   &d->usage};
+    struct rb_gpu_buffer *buffers[] = {
+        &b->bounds,      &b->samples,     &b->lights,      &b->vpls,         &b->vpl_views,
+        &b->probe_views, &b->vpl_draws,   &b->probe_draws, &b->bundle_views, &b->emitters,
+        &b->emit_info,   &b->emitter_cdf, &d->usage};
     for (size_t i = 0; i < COUNT(buffers); i++)
         rb_gpu_buffer_release(gpu, buffers[i]);
     for (int i = 0; i < RB_VIEW_RSM_TARGETS; i++) {
@@ -145,6 +144,9 @@ static enum rb_status upload_emitters(struct rb_integrator *it, struct rb_bdpt_f
     b->emitter_count = count;
     enum rb_status st = rb_frame_buffer(it->gpu, (VkDeviceSize)(count ? count : 1) * sizeof(*list),
                                         STORAGE, false, "bdpt.emitters", &b->emitters, err);
+    if (st == RB_OK)
+        st = rb_frame_buffer(it->gpu, (VkDeviceSize)(count ? count : 1) * sizeof(float), STORAGE,
+                             false, "bdpt.emitter_cdf", &b->emitter_cdf, err);
     if (st == RB_OK && count)
         st = rb_gpu_buffer_upload(it->gpu, &b->emitters, list, count * sizeof(*list), err);
     free(list);
@@ -575,7 +577,19 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
         {.buffer = &b->probe_views, .use = RB_GPU_COMPUTE_WRITE},
         {.buffer = &b->vpl_draws, .use = RB_GPU_COMPUTE_WRITE},
         {.buffer = &b->probe_draws, .use = RB_GPU_COMPUTE_WRITE},
+        {.buffer = &b->emitter_cdf, .use = RB_GPU_COMPUTE_READ},
     };
+    if (b->emitter_count) {
+        const struct rb_gpu_access emitters[] = {
+            {.buffer = &ctx->cur->vertices, .use = RB_GPU_COMPUTE_READ},
+            {.buffer = &b->emitters, .use = RB_GPU_COMPUTE_READ},
+            {.buffer = &frame->materials, .use = RB_GPU_COMPUTE_READ},
+            {.buffer = &b->emitter_cdf, .use = RB_GPU_COMPUTE_WRITE},
+        };
+        rb_integrator_pass_begin(it, cmd, "emitters", emitters, COUNT(emitters));
+        rb_pass_bdpt_emitters_record(d->passes, cmd, frame, ctx->cur, b);
+        rb_integrator_pass_end(it, cmd);
+    }
     rb_integrator_pass_begin(it, cmd, "generate", generate, COUNT(generate));
     rb_pass_bdpt_generate_record(d->passes, cmd, frame, ctx->cur, b);
     rb_integrator_pass_end(it, cmd);

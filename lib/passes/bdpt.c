@@ -9,13 +9,14 @@
 #include "bdpt_bounce.comp.h"
 #include "bdpt_bounds.comp.h"
 #include "bdpt_connect.comp.h"
+#include "bdpt_emitters.comp.h"
 #include "bdpt_filter.comp.h"
 #include "bdpt_gather.comp.h"
 #include "bdpt_generate.comp.h"
 #include "bdpt_split.comp.h"
 
 struct rb_pass_bdpt {
-    struct rb_pass bounds, generate, bounce, split, connect, gather, filter;
+    struct rb_pass bounds, emitters, generate, bounce, split, connect, gather, filter;
 };
 
 static const struct rb_pass_binding bounds_bindings[] = {
@@ -23,6 +24,14 @@ static const struct rb_pass_binding bounds_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_BOUNDS_OUT, STORAGE_BUFFER),
 };
 _Static_assert(COUNT(bounds_bindings) == RB_BIND_BDPT_BOUNDS_COUNT, "bounds bindings");
+
+static const struct rb_pass_binding emitters_bindings[] = {
+    RB_PASS_BIND(RB_BIND_BDPT_EMITTERS_VERTICES, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_EMITTERS_EMITTERS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_EMITTERS_MATERIALS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_EMITTERS_CDF, STORAGE_BUFFER),
+};
+_Static_assert(COUNT(emitters_bindings) == RB_BIND_BDPT_EMITTERS_COUNT, "emitters bindings");
 
 static const struct rb_pass_binding generate_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_BOUNDS, STORAGE_BUFFER),
@@ -45,6 +54,7 @@ static const struct rb_pass_binding generate_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_PROBE_VIEWS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_VPL_DRAWS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_PROBE_DRAWS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_GENERATE_EMITTER_CDF, STORAGE_BUFFER),
 };
 _Static_assert(COUNT(generate_bindings) == RB_BIND_BDPT_GENERATE_COUNT, "generate bindings");
 
@@ -145,6 +155,8 @@ enum rb_status rb_pass_bdpt_create(struct rb_gpu *gpu, struct rb_pass_bdpt **out
     const uint32_t image_push = sizeof(struct rb_gpu_bdpt_image_push);
     enum rb_status st;
     if ((st = COMPUTE(bounds, "bounds", bounds_bindings, 0, rb_spv_bdpt_bounds_comp)) ||
+        (st = COMPUTE(emitters, "emitters", emitters_bindings,
+                      sizeof(struct rb_gpu_bdpt_emitters_push), rb_spv_bdpt_emitters_comp)) ||
         (st = COMPUTE(generate, "generate", generate_bindings,
                       sizeof(struct rb_gpu_bdpt_generate_push), rb_spv_bdpt_generate_comp)) ||
         (st = COMPUTE(bounce, "bounce", bounce_bindings, sizeof(struct rb_gpu_bdpt_bounce_push),
@@ -171,6 +183,7 @@ void rb_pass_bdpt_destroy(struct rb_pass_bdpt *p)
     rb_pass_release(&p->split);
     rb_pass_release(&p->bounce);
     rb_pass_release(&p->generate);
+    rb_pass_release(&p->emitters);
     rb_pass_release(&p->bounds);
     free(p);
 }
@@ -215,6 +228,21 @@ void rb_pass_bdpt_bounds_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     vkCmdDispatch(cmd, groups(frame->width_px, 8), groups(frame->height_px, 8), 1);
 }
 
+void rb_pass_bdpt_emitters_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                  const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                                  const struct rb_bdpt_frame *b)
+{
+    struct rb_pass_bindings bind = {.pass = &p->emitters};
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_EMITTERS_VERTICES, &slot->vertices);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_EMITTERS_EMITTERS, &b->emitters);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_EMITTERS_MATERIALS, &frame->materials);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_EMITTERS_CDF, &b->emitter_cdf);
+    rb_pass_record_bindings(cmd, &bind);
+    struct rb_gpu_bdpt_emitters_push pc = {.counts = {b->emitter_count, 0, 0, 0}};
+    push(cmd, &p->emitters, &pc, sizeof(pc));
+    vkCmdDispatch(cmd, 1, 1, 1);
+}
+
 void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                   const struct rb_frame *frame, const struct rb_frame_slot *slot,
                                   const struct rb_bdpt_frame *b)
@@ -242,6 +270,7 @@ void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_PROBE_VIEWS, &b->probe_views);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_VPL_DRAWS, &b->vpl_draws);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_PROBE_DRAWS, &b->probe_draws);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_EMITTER_CDF, &b->emitter_cdf);
     rb_pass_record_bindings(cmd, &bind);
     struct rb_gpu_bdpt_generate_push pc = {
         .counts = {b->vpl_count, b->bundle_count, frame->light_count, b->rsm[0].width_px},

@@ -28,6 +28,7 @@ _Static_assert(sizeof(struct rb_gpu_bdpt_emit_info) == 16, "bdpt emitter summary
 _Static_assert(sizeof(struct rb_gpu_bdpt_generate_push) == 48, "generate push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_connect_push) == 80, "connect push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_bounce_push) == 32, "bounce push constants");
+_Static_assert(sizeof(struct rb_gpu_bdpt_emitters_push) == 16, "emitters push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_image_push) == 32, "split/gather/filter push constants");
 _Static_assert(sizeof(struct rb_scene_vertex) == RB_SRC_VERTEX_FLOATS * 4, "source vertex");
 _Static_assert(sizeof(struct rb_scene_morph_delta) == RB_MORPH_DELTA_FLOATS * 4, "morph delta");
@@ -309,6 +310,7 @@ struct rb_bdpt_frame {
     struct rb_gpu_buffer bundle_views; /* struct rb_gpu_view [K_b]: orthographic */
     struct rb_gpu_buffer emitters;     /* struct rb_gpu_bdpt_emitter [emitter_count] */
     struct rb_gpu_buffer emit_info;    /* struct rb_gpu_bdpt_emit_info */
+    struct rb_gpu_buffer emitter_cdf;  /* float [emitter_count]: running sums of their weights */
     struct rb_gpu_image rsm[RB_VIEW_RSM_TARGETS];   /* a layer per shadow layer of the frame */
     struct rb_gpu_image rsm_depth;                  /* D32 scratch */
     struct rb_gpu_image probe[RB_VIEW_RSM_TARGETS]; /* 1x1, a layer per VPL (with bounces) */
@@ -332,6 +334,10 @@ void rb_pass_bdpt_destroy(struct rb_pass_bdpt *p);
 /* The box of the G-buffer's points into b->bounds (it fills the box empty first). */
 void rb_pass_bdpt_bounds_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                 const struct rb_frame *frame, const struct rb_bdpt_frame *b);
+/* The emissive triangles' CDF by power into b->emitter_cdf (one workgroup). */
+void rb_pass_bdpt_emitters_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                  const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                                  const struct rb_bdpt_frame *b);
 /* VPLs from the RSMs and the sampling table, their paraboloid views, the bundles' views. */
 void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                   const struct rb_frame *frame, const struct rb_frame_slot *slot,

@@ -89,6 +89,11 @@ struct rb_gpu_bdpt_connect_push {
                         * has none; y, z, w: unused */
 };
 
+/* Push constants of bdpt_emitters.comp. */
+struct rb_gpu_bdpt_emitters_push {
+    RB_UVEC4(counts); /* the emissive triangles, unused, unused, unused */
+};
+
 /* Push constants of bdpt_bounce.comp. */
 struct rb_gpu_bdpt_bounce_push {
     RB_UVEC4(counts); /* K_v, unused, unused, unused */

@@ -78,7 +78,15 @@
 #define RB_BIND_BDPT_GENERATE_PROBE_VIEWS 17 /* written: an emitter VPL's probe, perspective */
 #define RB_BIND_BDPT_GENERATE_VPL_DRAWS 18   /* written: instance counts, VPLs 0..K_v - 1 */
 #define RB_BIND_BDPT_GENERATE_PROBE_DRAWS 19 /* written: instance counts */
-#define RB_BIND_BDPT_GENERATE_COUNT 20
+#define RB_BIND_BDPT_GENERATE_EMITTER_CDF 20 /* bdpt_emitters.comp's */
+#define RB_BIND_BDPT_GENERATE_COUNT 21
+
+/* bdpt_emitters.comp: the emissive triangles' CDF by power */
+#define RB_BIND_BDPT_EMITTERS_VERTICES 0
+#define RB_BIND_BDPT_EMITTERS_EMITTERS 1
+#define RB_BIND_BDPT_EMITTERS_MATERIALS 2
+#define RB_BIND_BDPT_EMITTERS_CDF 3 /* written */
+#define RB_BIND_BDPT_EMITTERS_COUNT 4
 
 /* bdpt_bounce.comp: the bounces of the emitters' VPLs, from their probes */
 #define RB_BIND_BDPT_BOUNCE_VPLS 0 /* read (VPL i), written (VPL K_v + i) */

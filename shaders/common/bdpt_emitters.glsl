@@ -1,0 +1,20 @@
+// The emissive triangles' weights, shared by bdpt_emitters.comp (their CDF) and
+// bdpt_generate.comp (the point on the one picked). Needs the buffers `vertices` (the frame's
+// world vertices), `emitters` and `materials` declared.
+
+float luminance(vec3 c)
+{
+    return dot(max(c, vec3(0.0)), vec3(0.2126, 0.7152, 0.0722));
+}
+
+// Emissive triangle e's area times the luminance of its emissive factor: its share of the
+// emitters' power (as the reference weighs them).
+float emitter_weight(uint e, out vec3 p0, out vec3 p1, out vec3 p2)
+{
+    uvec4 t = emitters[e].tri;
+    p0 = vertices[t.x].position.xyz;
+    p1 = vertices[t.y].position.xyz;
+    p2 = vertices[t.z].position.xyz;
+    float area = 0.5 * length(cross(p1 - p0, p2 - p0));
+    return area * luminance(materials[t.w].emissive.rgb);
+}
