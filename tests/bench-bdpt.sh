@@ -10,7 +10,7 @@
 #     bundles beside the reference at 4 to 256 spp, all against the reference at 4096 spp; the
 #     reference's relMSE-against-time power law, fitted, gives the time it needs for each bdpt
 #     error (goal: >= 20x bdpt's), and bdpt's error floor (its bias) is said when K finds one.
-# Sizes are small so that make bench stays near 15 minutes on two shared cores.
+# Sizes are small so that make bench takes about 11 minutes on two shared cores.
 #
 #   BUILD=build sh tests/bench-bdpt.sh
 #
@@ -49,14 +49,13 @@ reference() {
     reference_job=$1 reference_dir=$2
     shift 2
     "$BUILD/raybundle" reference "$reference_job" --set integrator.reference.paths=bdpt \
-        --out "$reference_dir" -q \
-        "$@" </dev/null >/dev/null
+        --out "$reference_dir" -q "$@" </dev/null >/dev/null
 }
 
 # relmse TEST TRUTH [LAYER]: the relative MSE of the image TEST against TRUTH.
 relmse() {
-    set -- "$1" "$2" --layer "${3:-beauty}"
-    "$BUILD/raybundle" compare "$@" </dev/null | sed -n 's/^relmse *//p'
+    "$BUILD/raybundle" compare "$1" "$2" --layer "${3:-beauty}" </dev/null |
+        sed -n 's/^relmse *//p'
 }
 
 # The Cornell box as the classic view frames it, lit by its emissive quad alone.
@@ -81,8 +80,8 @@ largest=$(find -L "$SCENES" -name '*.glb' -o -name '*.gltf' 2>/dev/null | sort |
     xargs -r "$BUILD/tests/tools/triangles" | sort -k1,1nr -k2 | head -n 1)
 
 echo "bdpt bench: $k VPLs + $k bundles at $size, medians over frames 0-$last; error against" \
-    "time on the Cornell box at $curve_size (sizes kept small: make bench takes about 15" \
-    "minutes on two cores)"
+    "time on the Cornell box at $curve_size (sizes kept small: make bench takes about 11" \
+    "minutes on two shared cores)"
 if [ -n "$largest" ]; then
     echo "largest scene in $SCENES: ${largest#* "$SCENES"/} (${largest%% *} triangles)"
 else
@@ -90,18 +89,20 @@ else
 fi
 $has_cornell || echo "cornell-box: skipped, no $cornell (set RB_SCENES)"
 
-# frame_times NAME JOB SIZE: direct and bdpt over frames 0-$last; per-pass medians of bdpt and
-# both frames' wall and GPU medians, and their ratio.
+# frame_times NAME JOB SIZE: bdpt over frames 0-$last between two runs of direct over the same
+# frames (the machine's load drifts; the direct median is over both); per-pass medians of bdpt,
+# both integrators' frame wall and GPU medians, and their ratio.
 frame_times() {
     times_dir="$out/$1-$3"
-    render "$2" "$times_dir/direct" --integrator direct --size "$3" --frames "0-$last"
-    render "$2" "$times_dir/bdpt" --integrator bdpt --size "$3" --frames "0-$last" \
-        --set integrator.bdpt.vpls=$k --set integrator.bdpt.bundles=$k
+    for run in direct bdpt direct-after; do
+        render "$2" "$times_dir/$run" --integrator "${run%-after}" --size "$3" --frames "0-$last" \
+            --set integrator.bdpt.vpls=$k --set integrator.bdpt.bundles=$k
+    done
     pass_medians "bdpt $1 $3 " "$times_dir"/bdpt/frame.*.timing.json
     awk -v name="$1" -v size="$3" -v bw="$(field wall_ms "$times_dir"/bdpt/*.timing.json | median)" \
         -v bg="$(field gpu_total_ms "$times_dir"/bdpt/*.timing.json | median)" \
-        -v dw="$(field wall_ms "$times_dir"/direct/*.timing.json | median)" \
-        -v dg="$(field gpu_total_ms "$times_dir"/direct/*.timing.json | median)" 'BEGIN {
+        -v dw="$(field wall_ms "$times_dir"/direct*/*.timing.json | median)" \
+        -v dg="$(field gpu_total_ms "$times_dir"/direct*/*.timing.json | median)" 'BEGIN {
         printf "bdpt %s %s frame: wall %.1f ms, GPU passes %.1f ms; direct frame: wall %.1f ms, GPU passes %.1f ms\n",
             name, size, bw, bg, dw, dg
         printf "bdpt %s %s bdpt / direct: %.2f wall, %.2f GPU passes%s\n", name, size, bw / dw,
