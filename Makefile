@@ -196,7 +196,7 @@ test check: $(BUILD)/raybundle $(BUILD)/mkdemo $(UNIT_BIN) $(TOOL_BIN) $(FUZZ_RE
 check-farm: $(BUILD)/raybundle
 	$(Q)BUILD=$(BUILD) tests/run.sh tests/farm/slurm.sh
 
-bench: $(BUILD)/raybundle
+bench: $(BUILD)/raybundle $(BUILD)/tests/tools/triangles
 	$(Q)BUILD=$(BUILD) tests/bench.sh
 
 # Golden frames for t0130: only for a change meant to change pixels (see tests/golden/update.sh).

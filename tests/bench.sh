@@ -2,9 +2,11 @@
 # Benchmark (not a test): renders the demo at 640x360 for 24 frames and prints each pass's
 # median GPU milliseconds, frames per second and peak resident memory; the timing compare of
 # the build against itself; the same frames as a Slurm array against one process; then the CPU
-# reference's speed, and its error on the Cornell box at 64 to 1024 spp.
+# reference's speed, and its error on the Cornell box at 64 to 1024 spp; last, the bdpt
+# integrator's figures (tests/bench-bdpt.sh, which says what they are).
 set -eu
 BUILD=${BUILD:-build}
+. tests/bench-lib.sh
 out=$(mktemp -d "${TMPDIR:-/tmp}/raybundle-bench.XXXXXX")
 trap 'rm -rf "$out"' EXIT
 start=$(date +%s.%N)
@@ -15,17 +17,9 @@ frames=24
 echo "raybundle bench: demo, 640x360, $frames frames, direct integrator"
 sed -n 's/.*"device": "\([^"]*\)".*/device: \1/p' "$out/frame.0000.timing.json" | head -n 1
 sed -n 's/.*"driver": "\([^"]*\)".*/driver: \1/p' "$out/frame.0000.timing.json" | head -n 1
-cat "$out"/frame.*.timing.json | tr '{' '\n' |
-    sed -n 's/.*"name": "\([^"]*\)", "gpu_ms": \([0-9.eE+-]*\).*/\1 \2/p' |
-    awk '{ if (!($1 in n)) order[++k] = $1; v[$1, ++n[$1]] = $2 + 0 }
-         END { for (i = 1; i <= k; i++) { p = order[i]; c = n[p];
-               for (a = 2; a <= c; a++) { x = v[p, a]; b = a - 1;
-                   while (b >= 1 && v[p, b] > x) { v[p, b + 1] = v[p, b]; b-- } v[p, b + 1] = x }
-               m = (c % 2) ? v[p, (c + 1) / 2] : (v[p, c / 2] + v[p, c / 2 + 1]) / 2;
-               printf "pass %-10s median %8.3f ms gpu\n", p, m } }'
-median() { sort -g | awk '{ v[++n] = $1 } END { print (n % 2) ? v[(n + 1) / 2] : (v[n / 2] + v[n / 2 + 1]) / 2 }'; }
-wall=$(cat "$out"/frame.*.timing.json | sed -n 's/.*"wall_ms": \([0-9.eE+-]*\).*/\1/p' | median)
-gpu=$(cat "$out"/frame.*.timing.json | sed -n 's/.*"gpu_total_ms": \([0-9.eE+-]*\).*/\1/p' | median)
+pass_medians "" "$out"/frame.*.timing.json
+wall=$(field wall_ms "$out"/frame.*.timing.json | median)
+gpu=$(field gpu_total_ms "$out"/frame.*.timing.json | median)
 # wall_ms: rendering the frame and handing it to the writer thread, which compresses and writes
 # the previous frame meanwhile; the ratio is the frame's cost over its GPU passes (goal <= 1.3).
 awk -v w="$wall" -v g="$gpu" 'BEGIN { printf "frame wall median %.1f ms, GPU passes median %.1f ms: wall / GPU %.2f\n", w, g, w / g }'
@@ -104,3 +98,5 @@ EOT
 else
     echo "reference cornell-box relMSE: skipped, no $cornell (set RB_SCENES)"
 fi
+
+BUILD=$BUILD sh tests/bench-bdpt.sh
