@@ -2,8 +2,12 @@
 // neighbouring pixels' sample subsets. A pixel averages the gathered light of the pixels within
 // the radius that saw samples (w of the indirect diffuse image: 1) and lie on the same surface:
 // their view depths differ by at most the depth threshold (relative) and their normals by an
-// angle whose cosine is at least the normal threshold. Every weight is 0 or 1, and the sum runs
-// in a fixed order, so the result does not depend on scheduling.
+// angle whose cosine is at least the normal threshold. Indirect light, of low frequency, takes
+// the whole radius; direct light (emitters' points and the environment through the bundles),
+// which can change fast across a surface (a wall just below an area light), only one interleave
+// block's, enough to gather every sub-image's samples (on the Cornell box with 256 VPLs and
+// bundles its relMSE falls from 0.070 to 0.036). Every weight is 0 or 1, and the sums run in a
+// fixed order, so the result does not depend on scheduling.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "bindings_shared.h"
@@ -32,7 +36,8 @@ void main()
         return;
     vec4 p = imageLoad(gb_position, px);
     vec3 s0 = vec3(0.0), s1 = vec3(0.0), s2 = vec3(0.0), s3 = vec3(0.0);
-    float count = 0.0;
+    float count = 0.0, count_d = 0.0;
+    int rd = int(pc.stops.z);
     if (p.w > 0.0) {
         vec3 n = imageLoad(gb_normal, px).xyz;
         int r = int(pc.split.w);
@@ -48,16 +53,19 @@ void main()
                 if (!(abs(z - p.w) <= pc.stops.x * p.w) ||
                     dot(imageLoad(gb_normal, q).xyz, n) < pc.stops.y)
                     continue;
-                s0 += imageLoad(i0, q).rgb;
-                s1 += imageLoad(i1, q).rgb;
+                if (abs(dx) <= rd && abs(dy) <= rd) {
+                    s0 += imageLoad(i0, q).rgb;
+                    s1 += imageLoad(i1, q).rgb;
+                    count_d += 1.0;
+                }
                 s2 += c2.rgb;
                 s3 += imageLoad(i3, q).rgb;
                 count += 1.0;
             }
     }
-    float inv = count > 0.0 ? 1.0 / count : 0.0;
-    imageStore(o0, px, vec4(s0 * inv, 0.0));
-    imageStore(o1, px, vec4(s1 * inv, 0.0));
+    float inv = count > 0.0 ? 1.0 / count : 0.0, inv_d = count_d > 0.0 ? 1.0 / count_d : 0.0;
+    imageStore(o0, px, vec4(s0 * inv_d, 0.0));
+    imageStore(o1, px, vec4(s1 * inv_d, 0.0));
     imageStore(o2, px, vec4(s2 * inv, count));
     imageStore(o3, px, vec4(s3 * inv, 0.0));
 }

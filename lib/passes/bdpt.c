@@ -197,7 +197,10 @@ static struct rb_gpu_bdpt_image_push image_push(const struct rb_bdpt_frame *b)
 {
     return (struct rb_gpu_bdpt_image_push){
         .split = {b->interleave, b->sub_width_px, b->sub_height_px, b->filter_radius_px},
-        .stops = {b->filter_depth, b->filter_normal, 0.0f, 0.0f},
+        .stops = {b->filter_depth, b->filter_normal,
+                  (float)(b->filter_radius_px < b->interleave / 2 ? b->filter_radius_px
+                                                                  : b->interleave / 2),
+                  0.0f},
     };
 }
 

@@ -103,7 +103,8 @@ struct rb_gpu_bdpt_bounce_push {
 /* Push constants of the split, gather and filter passes. */
 struct rb_gpu_bdpt_image_push {
     RB_UVEC4(split);  /* n, sub-image width, height, filter radius */
-    RB_VEC4(stops);   /* depth threshold, normal threshold, unused, unused */
+    RB_VEC4(stops);   /* depth threshold, normal threshold, the direct light's filter radius
+                       * (the radius, at most n / 2: one interleave block), unused */
 };
 
 /* ---- the MIS weights (BDPT.md "As implemented"), one definition for GLSL and C: the connect
