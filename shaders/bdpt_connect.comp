@@ -194,15 +194,17 @@ void from_vpl_at_x1(uint j, vec3 x1, vec3 n1, vec3 ng1, vec3 v1, vec3 f0, float 
 }
 
 // (c) for VPL j: its light at the bundle's hit z1 (normal nz, reached along dir from x1, cos_in
-// there), reflected at z1 to x1, times scale (the bundle's 2 pi cos1 / n_c). With mis, j is an
-// emitter's point and the path is weighed against its bounce VPLs finding z1 through (a).
+// there), reflected at z1 to x1, times scale (the bundle's 2 pi cos1 / n_c). An emitter's point
+// (emitter) makes one-bounce paths: its G is not clamped (the clamp is for two-bounce paths,
+// whose singularity nothing balances), and with mis the path is weighed against its bounce
+// VPLs finding z1 through (a).
 void via_bundle(uint j, vec3 z1, vec3 nz, vec3 dir, rb_bundle_hit h, float cos_in, vec3 n1,
-                vec3 v1, vec3 f0, float f90, float rough, float scale, bool mis, inout vec3 id,
-                inout vec3 is)
+                vec3 v1, vec3 f0, float f90, float rough, float scale, bool emitter, bool mis,
+                inout vec3 id, inout vec3 is)
 {
     vec3 l;
     float r2;
-    vec3 x = from_vpl(j, z1, nz, nz, true, l, r2);
+    vec3 x = from_vpl(j, z1, nz, nz, !emitter, l, r2);
     if (!any(greaterThan(x, vec3(0.0))))
         return;
     x *= surface_brdf(nz, -dir, l, h.m);
@@ -289,11 +291,11 @@ void main()
                     bool is_emitter = uint(vpls[k].from.w) == RB_BDPT_VPL_EMITTER;
                     if (has_vpl && !(is_emitter && strategies == RB_BDPT_VPL))
                         via_bundle(k, z1, nz, dir, h, cos_in, n1, v1, f0, f90, rough,
-                                              scale / n_c, is_emitter && strategies == RB_BDPT_MIS,
-                                              id, is);
+                                   scale / n_c, is_emitter, is_emitter && strategies == RB_BDPT_MIS,
+                                   id, is);
                     if (has_bounce)
                         via_bundle(pc.bounce.x, z1, nz, dir, h, cos_in, n1, v1, f0, f90, rough,
-                                   scale / n_c, false, id, is);
+                                   scale / n_c, false, false, id, is);
                 }
             }
         }

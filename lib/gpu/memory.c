@@ -3,6 +3,7 @@
 #include "gpu/gpu.h"
 #include "gpu/gpu_int.h"
 
+#include <stdio.h>
 #include <string.h>
 
 enum rb_status rb_gpu_alloc(struct rb_gpu *gpu, VkMemoryRequirements req,
@@ -27,8 +28,13 @@ enum rb_status rb_gpu_alloc(struct rb_gpu *gpu, VkMemoryRequirements req,
         .memoryTypeIndex = (uint32_t)best,
     };
     VkResult vr = vkAllocateMemory(gpu->device, &ai, NULL, out);
-    if (vr < 0)
-        return rb_gpu_fail(err, vr, "vkAllocateMemory", what);
+    if (vr < 0) {
+        /* Say how much: a setting that sizes it (a map size times a count) is the usual fix. */
+        char call[64];
+        snprintf(call, sizeof(call), "vkAllocateMemory of %.1f MiB",
+                 (double)req.size / (1024.0 * 1024.0));
+        return rb_gpu_fail(err, vr, call, what);
+    }
     return RB_OK;
 }
 

@@ -55,6 +55,13 @@ rb render jobs/demo.yaml $small $maps --integrator bdpt --out "$T/s" \
 expect_exit 1 "--strict makes an overflow exit 1"
 stderr_has "--strict makes that an error" "--strict says why"
 check "--strict writes nothing of the failed frame" test ! -e "$T/s/frame.0000.exr"
+# Maps no device holds (4096 VPLs and their bounces, 4096^2 floats each: 512 GiB) fail with
+# their size and name.
+rb render jobs/demo.yaml $small --integrator bdpt --out "$T/m" \
+    --set integrator.bdpt.vpl_size=4096 --set integrator.bdpt.vpls=4096
+check "VPL maps too large for the device fail" test "$status" -ne 0
+stderr_has "of 524288.0 MiB 'bdpt.vpl_maps'" "the error names the maps and their size"
+check "nothing is written" test ! -e "$T/m/frame.0000.exr"
 
 # Accuracy: the reference in bdpt's path space, against bdpt with more and more samples.
 rb reference jobs/demo.yaml $small --spp 512 --set integrator.reference.paths=bdpt --out "$T/r"
