@@ -13,7 +13,8 @@
 // against (b)'s emission hits) and whose (c) is one bounce; its bounce VPL y1 (K_v + k, found
 // by its probe) makes those one-bounce paths again through (a), and the two are weighed over
 // the n_c pairs and n_a VPLs with p(y1 | y0) (y0's density is both sides' and cancels); the
-// bounce VPL's (c) is the emitter's second bounce, the only strategy for it. What reaches x1 is split into its BRDF's diffuse and specular parts (rb_brdf_parts)
+// bounce VPL's (c) is the emitter's second bounce, the only strategy for it. What reaches x1
+// is split into its BRDF's diffuse and specular parts (rb_brdf_parts)
 // and added, in k order and without atomics, to x1's own texel of four accumulators.
 #version 460
 #extension GL_GOOGLE_include_directive : require

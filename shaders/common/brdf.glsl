@@ -13,17 +13,22 @@ float rb_spec_map(vec3 f0)
     return max((f0.r + f0.g + f0.b) / 3.0, 1e-3);
 }
 
-// c_diff: diffuse albedo; f0, f90: Fresnel at normal and grazing incidence; alpha = roughness^2.
-vec3 rb_brdf(vec3 n, vec3 v, vec3 l, vec3 c_diff, vec3 f0, float f90, float roughness)
+// The GGX lobe's Fresnel F, distribution D and Smith height-correlated visibility V, shared by
+// rb_brdf and rb_brdf_parts; false where nothing is reflected (alpha = roughness^2).
+bool rb_ggx(vec3 n, vec3 v, vec3 l, vec3 f0, float f90, float roughness, out vec3 F, out float D,
+            out float V)
 {
+    F = vec3(0.0);
+    D = 0.0;
+    V = 0.0;
     float ndl = max(dot(n, l), 0.0);
     float ndv = max(dot(n, v), 1e-4);
     if (ndl <= 0.0)
-        return vec3(0.0);
+        return false;
     // l == -v: the half vector does not exist (normalize would give NaN), and there is no light.
     vec3 lv = l + v;
     if (!(dot(lv, lv) > 0.0))
-        return vec3(0.0);
+        return false;
     vec3 h = normalize(lv);
     float ndh = max(dot(n, h), 0.0);
     // Clamped above too: with l close to v, rounding puts dot(v, h) a few ulps over 1, and
@@ -31,11 +36,21 @@ vec3 rb_brdf(vec3 n, vec3 v, vec3 l, vec3 c_diff, vec3 f0, float f90, float roug
     float vdh = clamp(dot(v, h), 0.0, 1.0);
     float a = max(roughness * roughness, 1e-4);
     float a2 = a * a;
-    vec3 F = f0 + (vec3(f90) - f0) * pow(1.0 - vdh, 5.0);
+    F = f0 + (vec3(f90) - f0) * pow(1.0 - vdh, 5.0);
     float d = ndh * ndh * (a2 - 1.0) + 1.0;
-    float D = a2 / (RB_PI * d * d);
+    D = a2 / (RB_PI * d * d);
     float vis_den = ndl * sqrt(ndv * ndv * (1.0 - a2) + a2) + ndv * sqrt(ndl * ndl * (1.0 - a2) + a2);
-    float V = vis_den > 0.0 ? 0.5 / vis_den : 0.0;
+    V = vis_den > 0.0 ? 0.5 / vis_den : 0.0;
+    return true;
+}
+
+// c_diff: diffuse albedo; f0, f90: Fresnel at normal and grazing incidence.
+vec3 rb_brdf(vec3 n, vec3 v, vec3 l, vec3 c_diff, vec3 f0, float f90, float roughness)
+{
+    vec3 F;
+    float D, V;
+    if (!rb_ggx(n, v, l, f0, f90, roughness, F, D, V))
+        return vec3(0.0);
     return (vec3(1.0) - F) * c_diff / RB_PI + F * D * V;
 }
 
@@ -47,21 +62,10 @@ void rb_brdf_parts(vec3 n, vec3 v, vec3 l, vec3 f0, float f90, float roughness, 
 {
     kd = vec3(0.0);
     ks = vec3(0.0);
-    float ndl = max(dot(n, l), 0.0);
-    float ndv = max(dot(n, v), 1e-4);
-    vec3 lv = l + v;
-    if (ndl <= 0.0 || !(dot(lv, lv) > 0.0))
+    vec3 F;
+    float D, V;
+    if (!rb_ggx(n, v, l, f0, f90, roughness, F, D, V))
         return;
-    vec3 h = normalize(lv);
-    float ndh = max(dot(n, h), 0.0);
-    float vdh = clamp(dot(v, h), 0.0, 1.0);
-    float a = max(roughness * roughness, 1e-4);
-    float a2 = a * a;
-    vec3 F = f0 + (vec3(f90) - f0) * pow(1.0 - vdh, 5.0);
-    float d = ndh * ndh * (a2 - 1.0) + 1.0;
-    float D = a2 / (RB_PI * d * d);
-    float vis_den = ndl * sqrt(ndv * ndv * (1.0 - a2) + a2) + ndv * sqrt(ndl * ndl * (1.0 - a2) + a2);
-    float V = vis_den > 0.0 ? 0.5 / vis_den : 0.0;
     kd = (vec3(1.0) - F) / RB_PI;
     ks = F * D * V / rb_spec_map(f0);
 }
