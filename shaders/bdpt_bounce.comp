@@ -30,12 +30,7 @@ void main()
     if (i >= count)
         return;
     rb_gpu_vpl y0 = vpls[i];
-    rb_gpu_vpl o;
-    o.position = vec4(0.0);
-    o.normal = vec4(0.0, 0.0, 1.0, 0.0);
-    o.power = vec4(0.0);
-    o.from = vec4(y0.position.xyz, float(RB_BDPT_VPL_BOUNCE));
-    o.material = uvec4(0u, 0u, 0xffffffffu, 0u);
+    rb_gpu_vpl o = no_vpl(vec4(y0.position.xyz, float(RB_BDPT_VPL_BOUNCE)), 0xffffffffu);
     vec4 p = imageLoad(probe_position, ivec3(0, 0, int(i)));
     if (uint(y0.from.w) == RB_BDPT_VPL_EMITTER && y0.position.w > 0.0 && p.w > 0.0) {
         vec3 w = probe_views[i].axis.xyz;

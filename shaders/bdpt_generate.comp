@@ -104,12 +104,7 @@ void bundle(uint i)
 // bundles' nodes store it, so that the two strategies' weights are computed from one value.
 rb_gpu_vpl emitter_vpl(vec3 u, float p_e, float sum)
 {
-    rb_gpu_vpl o;
-    o.position = vec4(0.0);
-    o.normal = vec4(0.0, 0.0, 1.0, 0.0);
-    o.power = vec4(0.0);
-    o.from = vec4(0.0, 0.0, 0.0, float(RB_BDPT_VPL_EMITTER));
-    o.material = uvec4(0u, 0u, 0xffffffffu, 0u);
+    rb_gpu_vpl o = no_vpl(vec4(0.0, 0.0, 0.0, float(RB_BDPT_VPL_EMITTER)), 0xffffffffu);
     // The first triangle whose running sum passes the target: a binary search of the CDF.
     float target = u.x * sum;
     uint lo = 0u, hi = uint(pc.sizes.w) - 1u;
@@ -154,12 +149,8 @@ rb_gpu_vpl light_vpl(vec3 u, float p_e)
     uint kind = uint(L.position.w);
     int first = int(L.color.w);
     float size = float(pc.counts.w);
-    rb_gpu_vpl o;
-    o.position = vec4(0.0);
-    o.normal = vec4(0.0, 0.0, 1.0, 0.0);
-    o.power = vec4(0.0);
-    o.from = vec4(kind == RB_KIND_DIRECTIONAL ? -L.direction.xyz : L.position.xyz, float(kind));
-    o.material = uvec4(0u, 0u, j, 0u);
+    rb_gpu_vpl o =
+        no_vpl(vec4(kind == RB_KIND_DIRECTIONAL ? -L.direction.xyz : L.position.xyz, float(kind)), j);
     uint layer;
     ivec2 texel;
     vec3 w = vec3(0.0);

@@ -1,5 +1,19 @@
-// The views the bdpt passes make on the GPU (generate, bounce): a VPL's paraboloid view and an
-// emitter VPL's probe. Needs view_shared.h and shared.h.
+// What the bdpt passes that make VPLs share (generate, bounce): an empty VPL, a VPL's
+// paraboloid view and an emitter VPL's probe. Needs view_shared.h, shared.h and bdpt_shared.h.
+
+// A VPL that found no surface (position.w 0: connect skips it, and its map draws nothing) from
+// the given light (from: as rb_gpu_vpl's; light: the light's index, 0xffffffff for an emitter's
+// point or a bounce), which the caller fills in where it finds one.
+rb_gpu_vpl no_vpl(vec4 from, uint light)
+{
+    rb_gpu_vpl o;
+    o.position = vec4(0.0);
+    o.normal = vec4(0.0, 0.0, 1.0, 0.0);
+    o.power = vec4(0.0);
+    o.from = from;
+    o.material = uvec4(0u, 0u, light, 0u);
+    return o;
+}
 
 // A unit vector perpendicular to n, the same for the same n.
 vec3 perpendicular(vec3 n)
