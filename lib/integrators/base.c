@@ -29,13 +29,10 @@ void rb_base_destroy(struct rb_base *b)
 /* Each pass's declaration lists every frame resource its record function binds, draws with
  * or copies, with how (the shaders' stages and readonly/writeonly qualifiers); the driver
  * derives the barriers between the passes from them. */
-bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
-                           const struct rb_frame_ctx *ctx)
+void rb_base_record_animate(struct rb_integrator *it, struct rb_pass_animate *pass,
+                            VkCommandBuffer cmd, const struct rb_frame_slot *cur)
 {
     struct rb_frame *frame = &it->frame;
-    const struct rb_frame_slot *cur = ctx->cur, *prev = ctx->prev;
-    const struct rb_gpu_image *gb = frame->gbuffer;
-
     const struct rb_gpu_access animate[] = {
         {.buffer = &frame->src_vertices, .use = RB_GPU_COMPUTE_READ},
         {.buffer = &frame->morph_deltas, .use = RB_GPU_COMPUTE_READ},
@@ -45,8 +42,18 @@ bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkComman
         {.buffer = &cur->vertices, .use = RB_GPU_COMPUTE_WRITE},
     };
     rb_integrator_pass_begin(it, cmd, "animate", animate, COUNT(animate));
-    rb_pass_animate_record(b->animate, cmd, frame, cur);
+    rb_pass_animate_record(pass, cmd, frame, cur);
     rb_integrator_pass_end(it, cmd);
+}
+
+bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
+                           const struct rb_frame_ctx *ctx)
+{
+    struct rb_frame *frame = &it->frame;
+    const struct rb_frame_slot *cur = ctx->cur, *prev = ctx->prev;
+    const struct rb_gpu_image *gb = frame->gbuffer;
+
+    rb_base_record_animate(it, b->animate, cmd, cur);
     if (ctx->is_warmup)
         return false; /* a later frame reads this frame's world vertices, nothing else */
 

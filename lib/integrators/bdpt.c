@@ -367,13 +367,6 @@ static void write_lights(const struct rb_integrator *it, struct rb_bdpt_frame *b
     }
 }
 
-/* The index buffer the small views draw: the simplified mesh when there is one
- * (integrator.bdpt.view_triangles), the scene's otherwise. */
-static const struct rb_gpu_buffer *view_indices(const struct rb_frame *frame)
-{
-    return frame->view_indices.buffer ? &frame->view_indices : &frame->indices;
-}
-
 static void record_rsm(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer cmd,
                        const struct rb_frame_ctx *ctx)
 {
@@ -382,7 +375,7 @@ static void record_rsm(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer
     const struct rb_gpu_access uses[] = {
         {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
         {.buffer = &frame->shadow_views, .use = RB_GPU_GRAPHICS_READ},
-        {.buffer = view_indices(frame), .use = RB_GPU_INDEX_READ},
+        {.buffer = rb_view_index_buffer(frame, true), .use = RB_GPU_INDEX_READ},
         {.buffer = &frame->materials, .use = RB_GPU_FRAGMENT_READ},
         {.image = &frame->srgb_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
         {.image = &frame->linear_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
@@ -428,7 +421,7 @@ static void record_bounce(struct rb_integrator *it, struct bdpt *d, VkCommandBuf
         {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
         {.buffer = &b->probe_views, .use = RB_GPU_GRAPHICS_READ},
         {.buffer = &b->probe_draws, .use = RB_GPU_INDIRECT_READ},
-        {.buffer = view_indices(frame), .use = RB_GPU_INDEX_READ},
+        {.buffer = rb_view_index_buffer(frame, true), .use = RB_GPU_INDEX_READ},
         {.buffer = &frame->materials, .use = RB_GPU_FRAGMENT_READ},
         {.image = &frame->srgb_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
         {.image = &frame->linear_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
@@ -474,7 +467,7 @@ static void record_bundle(struct rb_integrator *it, struct bdpt *d, VkCommandBuf
     const struct rb_gpu_access uses[] = {
         {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
         {.buffer = &b->bundle_views, .use = RB_GPU_GRAPHICS_READ},
-        {.buffer = view_indices(frame), .use = RB_GPU_INDEX_READ},
+        {.buffer = rb_view_index_buffer(frame, true), .use = RB_GPU_INDEX_READ},
         {.buffer = &frame->materials, .use = RB_GPU_FRAGMENT_READ},
         {.image = &frame->srgb_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
         {.image = &frame->linear_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
@@ -601,7 +594,7 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
             {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
             {.buffer = &b->vpl_views, .use = RB_GPU_GRAPHICS_READ},
             {.buffer = &b->vpl_draws, .use = RB_GPU_INDIRECT_READ},
-            {.buffer = view_indices(frame), .use = RB_GPU_INDEX_READ},
+            {.buffer = rb_view_index_buffer(frame, true), .use = RB_GPU_INDEX_READ},
             {.image = &b->vpl_maps, .use = RB_GPU_COLOR_ATTACHMENT},
             {.image = &b->vpl_depth, .use = RB_GPU_DEPTH_ATTACHMENT},
         };

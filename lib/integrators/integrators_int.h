@@ -125,6 +125,10 @@ void rb_base_destroy(struct rb_base *b);
  * whether it recorded the frame's passes (false: a warm-up, which records nothing more). */
 bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
                            const struct rb_frame_ctx *ctx);
+/* Records the animate pass alone (the first of rb_base_record_direct's), for integrators and
+ * tools that draw their own views of the frame's world vertices. */
+void rb_base_record_animate(struct rb_integrator *it, struct rb_pass_animate *pass,
+                            VkCommandBuffer cmd, const struct rb_frame_slot *cur);
 /* Records output. light: NULL, or the RB_BDPT_LIGHT_COUNT images of gathered light. */
 void rb_base_record_output(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
                            const struct rb_gpu_image *light);

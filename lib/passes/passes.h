@@ -195,7 +195,9 @@ struct rb_view_batch {
     const struct rb_gpu_buffer *draws;
 };
 
-/* How many indices a batch draws (use_simplified as in struct rb_view_batch). */
+/* The index buffer a batch draws, and how many indices (use_simplified as in struct
+ * rb_view_batch). */
+const struct rb_gpu_buffer *rb_view_index_buffer(const struct rb_frame *frame, bool use_simplified);
 uint32_t rb_view_index_count(const struct rb_frame *frame, bool use_simplified);
 /* count draw commands into out (created with VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, storage and
  * transfer destination): each draws the whole mesh once. */

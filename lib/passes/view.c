@@ -306,8 +306,7 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
     p->gpu->push_descriptor_set(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p->layout.pipeline_layout, 0,
                                 w.count, w.w);
     /* The simplified mesh when asked for and the frame has one; the full mesh otherwise. */
-    bool is_simplified = batch->use_simplified && frame->view_indices.buffer;
-    const struct rb_gpu_buffer *indices = is_simplified ? &frame->view_indices : &frame->indices;
+    const struct rb_gpu_buffer *indices = rb_view_index_buffer(frame, batch->use_simplified);
     uint32_t index_count = rb_view_index_count(frame, batch->use_simplified);
     if (index_count)
         vkCmdBindIndexBuffer(cmd, indices->buffer, 0, VK_INDEX_TYPE_UINT32);
@@ -375,6 +374,11 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
                               VK_ACCESS_2_HOST_READ_BIT);
     if (p->gpu->end_label)
         p->gpu->end_label(cmd);
+}
+
+const struct rb_gpu_buffer *rb_view_index_buffer(const struct rb_frame *frame, bool use_simplified)
+{
+    return use_simplified && frame->view_indices.buffer ? &frame->view_indices : &frame->indices;
 }
 
 uint32_t rb_view_index_count(const struct rb_frame *frame, bool use_simplified)

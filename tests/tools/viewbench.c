@@ -133,23 +133,12 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
     struct bench *b = state;
     struct rb_frame *frame = &it->frame;
     const struct rb_frame_slot *cur = ctx->cur;
-    const struct rb_gpu_access animate[] = {
-        {.buffer = &frame->src_vertices, .use = RB_GPU_COMPUTE_READ},
-        {.buffer = &frame->morph_deltas, .use = RB_GPU_COMPUTE_READ},
-        {.buffer = &cur->instances, .use = RB_GPU_COMPUTE_READ},
-        {.buffer = &cur->joints, .use = RB_GPU_COMPUTE_READ},
-        {.buffer = &cur->weights, .use = RB_GPU_COMPUTE_READ},
-        {.buffer = &cur->vertices, .use = RB_GPU_COMPUTE_WRITE},
-    };
-    rb_integrator_pass_begin(it, cmd, "animate", animate, COUNT(animate));
-    rb_pass_animate_record(b->animate, cmd, frame, cur);
-    rb_integrator_pass_end(it, cmd);
+    rb_base_record_animate(it, b->animate, cmd, cur);
 
     const struct rb_gpu_access depth[] = {
         {.buffer = &cur->vertices, .use = RB_GPU_VERTEX_READ},
         {.buffer = &b->views, .use = RB_GPU_GRAPHICS_READ},
-        {.buffer = frame->view_indices.buffer ? &frame->view_indices : &frame->indices,
-         .use = RB_GPU_INDEX_READ},
+        {.buffer = rb_view_index_buffer(frame, true), .use = RB_GPU_INDEX_READ},
         {.image = &b->target, .use = RB_GPU_COLOR_ATTACHMENT},
         {.image = &b->depth, .use = RB_GPU_DEPTH_ATTACHMENT},
     };
