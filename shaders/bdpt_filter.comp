@@ -28,6 +28,32 @@ layout(binding = RB_BIND_BDPT_FILTER_OUT + 2, rgba32f) uniform writeonly image2D
 layout(binding = RB_BIND_BDPT_FILTER_OUT + 3, rgba32f) uniform writeonly image2D o3;
 layout(push_constant) uniform Push { rb_gpu_bdpt_image_push pc; };
 
+// The change of 1 / z to the next pixel along each axis: of the two neighbours' differences, the
+// smaller (the one on the same surface, at an edge); 0 where neither neighbour has a surface.
+vec2 inverse_depth_slope(ivec2 px, ivec2 size, float w)
+{
+    vec2 slope = vec2(0.0);
+    for (int axis = 0; axis < 2; axis++) {
+        float best = 0.0;
+        bool found = false;
+        for (int side = -1; side <= 1; side += 2) {
+            ivec2 q = px;
+            q[axis] += side;
+            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size)))
+                continue;
+            float z = imageLoad(gb_position, q).w;
+            if (!(z > 0.0))
+                continue;
+            float d = (1.0 / z - w) * float(side);
+            if (!found || abs(d) < abs(best))
+                best = d;
+            found = true;
+        }
+        slope[axis] = best;
+    }
+    return slope;
+}
+
 void main()
 {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -64,8 +90,12 @@ void main()
             }
     }
     float inv = count > 0.0 ? 1.0 / count : 0.0, inv_d = count_d > 0.0 ? 1.0 / count_d : 0.0;
-    imageStore(o0, px, vec4(s0 * inv_d, 0.0));
-    imageStore(o1, px, vec4(s1 * inv_d, 0.0));
+    // The outputs are the temporal cache's: its depth z_c, and the slope of 1 / z across the
+    // image (affine in the image for a plane seen in perspective), with which reconstruct moves
+    // z_c from this sample to where a pixel's surface lands.
+    vec2 slope = p.w > 0.0 ? inverse_depth_slope(px, size, 1.0 / p.w) : vec2(0.0);
+    imageStore(o0, px, vec4(s0 * inv_d, p.w));
+    imageStore(o1, px, vec4(s1 * inv_d, slope.x));
     imageStore(o2, px, vec4(s2 * inv, count));
-    imageStore(o3, px, vec4(s3 * inv, 0.0));
+    imageStore(o3, px, vec4(s3 * inv, slope.y));
 }

@@ -1,5 +1,7 @@
 // gbuffer: world-space vertices (from animate) to clip space, with the previous frame's
-// position for motion vectors.
+// position for motion vectors. A G-buffer of bdpt's temporal caches is drawn with its samples
+// offset from the pixel centres (the push constant; 0 for the frame's own). The position is
+// invariant: the reprojection pass draws the same surfaces again, testing depth for equality.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "bindings_shared.h"
@@ -8,6 +10,10 @@
 layout(std140, binding = RB_BIND_GBUFFER_GLOBALS) uniform Globals { rb_gpu_globals g; };
 layout(std430, binding = RB_BIND_GBUFFER_VERTICES) readonly buffer Verts { rb_gpu_vertex verts[]; };
 layout(std430, binding = RB_BIND_GBUFFER_PREV_VERTICES) readonly buffer Prev { rb_gpu_vertex prev[]; };
+
+layout(push_constant) uniform Jitter { vec4 jitter; } pc; // xy: the offset in clip space / w
+
+invariant gl_Position;
 
 layout(location = 0) out vec3 o_pos;
 layout(location = 1) out vec3 o_normal;
@@ -28,4 +34,5 @@ void main()
     o_clip = g.view_proj * vec4(v.position.xyz, 1.0);
     o_prev_clip = g.prev_view_proj * vec4(prev[gl_VertexIndex].position.xyz, 1.0);
     gl_Position = o_clip;
+    gl_Position.xy += pc.jitter.xy * o_clip.w;
 }

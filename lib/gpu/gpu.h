@@ -339,6 +339,7 @@ struct rb_gpu_graphics_desc {
     VkFormat depth_format; /* VK_FORMAT_UNDEFINED: none */
     VkCullModeFlags cull;
     bool has_depth_bias;
+    bool is_depth_equal; /* test EQUAL and write no depth: the surfaces an earlier pass drew */
     const char *debug_name;
 };
 enum rb_status rb_gpu_graphics_pipeline(struct rb_gpu *gpu, const struct rb_gpu_graphics_desc *d,

@@ -241,8 +241,8 @@ enum rb_status rb_gpu_graphics_pipeline(struct rb_gpu *gpu, const struct rb_gpu_
     VkPipelineDepthStencilStateCreateInfo ds = {
         .sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO,
         .depthTestEnable = has_depth,
-        .depthWriteEnable = has_depth,
-        .depthCompareOp = VK_COMPARE_OP_LESS};
+        .depthWriteEnable = has_depth && !d->is_depth_equal,
+        .depthCompareOp = d->is_depth_equal ? VK_COMPARE_OP_EQUAL : VK_COMPARE_OP_LESS};
     VkPipelineColorBlendAttachmentState blend[8] = {{0}};
     for (uint32_t i = 0; i < d->color_count && i < 8; i++)
         blend[i].colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |

@@ -46,17 +46,12 @@ void rb_base_record_animate(struct rb_integrator *it, struct rb_pass_animate *pa
     rb_integrator_pass_end(it, cmd);
 }
 
-bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
-                           const struct rb_frame_ctx *ctx)
+void rb_base_record_gbuffer(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
+                            const struct rb_frame_ctx *ctx, const struct rb_gbuffer_target *target)
 {
     struct rb_frame *frame = &it->frame;
     const struct rb_frame_slot *cur = ctx->cur, *prev = ctx->prev;
-    const struct rb_gpu_image *gb = frame->gbuffer;
-
-    rb_base_record_animate(it, b->animate, cmd, cur);
-    if (ctx->is_warmup)
-        return false; /* a later frame reads this frame's world vertices, nothing else */
-
+    const struct rb_gpu_image *gb = target ? target->colors : frame->gbuffer;
     const struct rb_gpu_access gbuffer[] = {
         {.buffer = &frame->globals, .use = RB_GPU_GRAPHICS_UNIFORM},
         {.buffer = &cur->vertices, .use = RB_GPU_VERTEX_READ},
@@ -71,24 +66,35 @@ bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkComman
         {.image = &gb[RB_GB_SPECULAR], .use = RB_GPU_COLOR_ATTACHMENT},
         {.image = &gb[RB_GB_EMISSION], .use = RB_GPU_COLOR_ATTACHMENT},
         {.image = &gb[RB_GB_MOTION], .use = RB_GPU_COLOR_ATTACHMENT},
-        {.image = &frame->depth, .use = RB_GPU_DEPTH_ATTACHMENT},
+        {.image = target ? target->depth : &frame->depth, .use = RB_GPU_DEPTH_ATTACHMENT},
     };
     _Static_assert(RB_GBUFFER_COLOR_COUNT == 6, "every G-buffer attachment is declared");
-    rb_integrator_pass_begin(it, cmd, "gbuffer", gbuffer, COUNT(gbuffer));
-    rb_pass_gbuffer_record(b->gbuffer, cmd, frame, cur, prev);
+    rb_integrator_pass_begin(it, cmd, target ? "cache_gbuffer" : "gbuffer", gbuffer,
+                             COUNT(gbuffer));
+    rb_pass_gbuffer_record(b->gbuffer, cmd, frame, cur, prev, target);
     rb_integrator_pass_end(it, cmd);
+}
 
+void rb_base_record_shadow(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
+                           const struct rb_frame_ctx *ctx)
+{
+    struct rb_frame *frame = &it->frame;
     const struct rb_gpu_access shadow[] = {
-        {.buffer = &cur->vertices, .use = RB_GPU_VERTEX_READ},
+        {.buffer = &ctx->cur->vertices, .use = RB_GPU_VERTEX_READ},
         {.buffer = &frame->shadow_views, .use = RB_GPU_GRAPHICS_READ},
         {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
         {.image = &frame->shadow_maps, .use = RB_GPU_COLOR_ATTACHMENT},
         {.image = &frame->shadow_depth, .use = RB_GPU_DEPTH_ATTACHMENT},
     };
     rb_integrator_pass_begin(it, cmd, "shadow", shadow, COUNT(shadow));
-    rb_pass_shadow_record(b->shadow, cmd, frame, cur);
+    rb_pass_shadow_record(b->shadow, cmd, frame, ctx->cur);
     rb_integrator_pass_end(it, cmd);
+}
 
+void rb_base_record_direct_light(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd)
+{
+    struct rb_frame *frame = &it->frame;
+    const struct rb_gpu_image *gb = frame->gbuffer;
     const struct rb_gpu_access direct[] = {
         {.buffer = &frame->globals, .use = RB_GPU_COMPUTE_UNIFORM},
         {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COMPUTE_READ},
@@ -106,6 +112,17 @@ bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkComman
     rb_integrator_pass_begin(it, cmd, "direct", direct, COUNT(direct));
     rb_pass_direct_record(b->direct, cmd, frame);
     rb_integrator_pass_end(it, cmd);
+}
+
+bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
+                           const struct rb_frame_ctx *ctx)
+{
+    rb_base_record_animate(it, b->animate, cmd, ctx->cur);
+    if (ctx->is_warmup)
+        return false; /* a later frame reads this frame's world vertices, nothing else */
+    rb_base_record_gbuffer(it, b, cmd, ctx, NULL);
+    rb_base_record_shadow(it, b, cmd, ctx);
+    rb_base_record_direct_light(it, b, cmd);
     return true;
 }
 

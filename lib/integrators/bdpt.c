@@ -8,29 +8,79 @@
  * VPL K_v + i, which gives the emitter's light its bounces as a punctual light's VPL does. Each VPL
  * gets a paraboloid shadow map; each global ray-bundle is an orthographic view into per-pixel
  * linked lists, connected to the sub-image of the interleaved G-buffer it lights before the next
- * one reuses the list. Its history is direct's: one frame, for motion vectors. */
+ * one reuses the list. Temporal interleaved sampling (seed 000, section A): l caches, one per
+ * subpixel offset; frame f computes cache f mod l alone, with that slot's own block of the
+ * sampling table on a G-buffer jittered by the slot's offset, overwriting it whole (light and
+ * depth); the reproject pass finds where each pixel's surface was in the frames of the other
+ * caches, and reconstruct takes the hit-weighted mean of the caches (equations 1 to 3) for
+ * output, which adds the direct light of the frame's own, centred G-buffer. Its history is the
+ * l - 1 frames before (at least one, for motion vectors); frames before the sequence's start
+ * fill no cache. */
 #include "integrators/integrators_int.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* A frame's camera, as the caches' reprojection needs it. */
+struct camera_then {
+    struct rb_mat4 view_proj;
+    float depth_row[4]; /* view depth = dot(depth_row, (x, 1)) */
+};
 
 struct bdpt {
     struct rb_base base;
     struct rb_pass_view *views;
     struct rb_pass_bdpt *passes;
+    struct rb_pass_reproject *reproject;
     struct rb_bdpt_frame b;
     struct rb_gpu_buffer usage; /* struct rb_gpu_list_counter per bundle, host-visible */
+    /* The caches' G-buffer, drawn at the slot's subpixel offset (l > 1) */
+    struct rb_gpu_image jittered[RB_GBUFFER_COLOR_COUNT], jittered_depth;
+    float offset_px[RB_BDPT_MAX_CACHES][2];      /* slot i's subpixel offset */
+    int written[RB_BDPT_MAX_CACHES];             /* the frame each slot holds; INT_MIN: none */
+    struct camera_then then[RB_BDPT_MAX_CACHES]; /* frame f's camera at f mod l */
 };
 
 /* The sampling table's streams (rb_qmc_point2): fixed, so every scene and frame draws the same
  * numbers. */
 enum { STREAM_VPL_DIRECTION = 1, STREAM_VPL_LIGHT = 2, STREAM_BUNDLE = 3, STREAM_VPL_BOUNCE = 4 };
 
+/* l, the temporal caches (the job's; 4 when unset). */
+static uint32_t cache_count(const struct rb_job *job)
+{
+    uint32_t l = job->integrator.bdpt.caches ? job->integrator.bdpt.caches : 4;
+    return l < RB_BDPT_MAX_CACHES ? l : RB_BDPT_MAX_CACHES;
+}
+
+/* A frame depends on the l - 1 before it (the caches they wrote), and on one at least (motion
+ * vectors). */
 static uint32_t history_frames(const struct rb_job *job)
 {
-    (void)job;
-    return 1;
+    uint32_t l = cache_count(job);
+    return l > 1 ? l - 1 : 1;
+}
+
+/* x mod n in 0..n-1, for negative x too (warm-ups before frame 0). */
+static uint32_t wrap(int64_t x, uint32_t n)
+{
+    return (uint32_t)((x % n + n) % n);
+}
+
+/* Slot i's subpixel offset: the Hammersley points, centred, ((i + 1/2) / l, phi2(i) + 1/(2l)) -
+ * (1/2, 1/2), phi2 the base-2 radical inverse; the centre when l is 1. */
+static void cache_offset(uint32_t l, uint32_t i, float out[2])
+{
+    uint32_t r = i;
+    r = (r << 16) | (r >> 16);
+    r = ((r & 0x00ff00ffu) << 8) | ((r & 0xff00ff00u) >> 8);
+    r = ((r & 0x0f0f0f0fu) << 4) | ((r & 0xf0f0f0f0u) >> 4);
+    r = ((r & 0x33333333u) << 2) | ((r & 0xccccccccu) >> 2);
+    r = ((r & 0x55555555u) << 1) | ((r & 0xaaaaaaaau) >> 1);
+    double y = (double)r / 4294967296.0 + 0.5 / l;
+    out[0] = (float)((i + 0.5) / l - 0.5);
+    out[1] = (float)(y - floor(y) - 0.5);
 }
 
 static void release(struct rb_gpu *gpu, struct bdpt *d)
@@ -39,7 +89,7 @@ static void release(struct rb_gpu *gpu, struct bdpt *d)
     struct rb_gpu_buffer *buffers[] = {
         &b->bounds,      &b->samples,     &b->lights,      &b->vpls,         &b->vpl_views,
         &b->probe_views, &b->vpl_draws,   &b->probe_draws, &b->bundle_views, &b->emitters,
-        &b->emit_info,   &b->emitter_cdf, &d->usage};
+        &b->emit_info,   &b->emitter_cdf, &d->usage,       &b->history,      &b->hits};
     for (size_t i = 0; i < COUNT(buffers); i++)
         rb_gpu_buffer_release(gpu, buffers[i]);
     for (int i = 0; i < RB_VIEW_RSM_TARGETS; i++) {
@@ -56,7 +106,12 @@ static void release(struct rb_gpu *gpu, struct bdpt *d)
         rb_gpu_image_release(gpu, &b->accum[i]);
         rb_gpu_image_release(gpu, &b->gathered[i]);
         rb_gpu_image_release(gpu, &b->filtered[i]);
+        rb_gpu_image_release(gpu, &b->light[i]);
     }
+    rb_gpu_image_release(gpu, &b->reproject);
+    for (int i = 0; i < RB_GBUFFER_COLOR_COUNT; i++)
+        rb_gpu_image_release(gpu, &d->jittered[i]);
+    rb_gpu_image_release(gpu, &d->jittered_depth);
 }
 
 static void destroy(struct rb_integrator *it, void *state)
@@ -65,6 +120,7 @@ static void destroy(struct rb_integrator *it, void *state)
     if (!d)
         return;
     release(it->gpu, d);
+    rb_pass_reproject_destroy(d->reproject);
     rb_pass_bdpt_destroy(d->passes);
     rb_pass_view_destroy(d->views);
     rb_base_destroy(&d->base);
@@ -76,19 +132,23 @@ static void destroy(struct rb_integrator *it, void *state)
 /* Draw commands the shaders edit. */
 #define DRAWS (STORAGE | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT)
 
-/* The fixed quasi-random table (BDPT.md "Sampling"): VPL i draws its light and its direction
- * from rows i, bundle i its direction from row K_v + i. */
-static enum rb_status upload_samples(struct rb_gpu *gpu, struct rb_bdpt_frame *b,
-                                     struct rb_err *err)
+/* The fixed quasi-random table (BDPT.md "Sampling"), a block of rows per cache slot, host-
+ * visible: in slot c's block, VPL i draws its light and its direction from row i, bundle i its
+ * direction from row K_v + i, and they are points k K + i of their streams (K = K_v or K_b),
+ * k = c when the samples are periodic. So the slots' subsets are disjoint, each one of the
+ * sequence's runs, and together its first l K points. With fresh samples, frame f rewrites its
+ * slot's block with k = f (new points every frame, as amortized sampling has them). A block is
+ * padded to the device's storage offset alignment, since generate binds one. */
+static void fill_samples(struct rb_bdpt_frame *b, uint32_t slot, uint32_t block)
 {
     uint32_t rows = b->vpl_count + b->bundle_count;
-    struct rb_gpu_bdpt_sample *s = calloc(rows ? rows : 1, sizeof(*s));
-    if (!s)
-        return rb_errf(err, RB_E_NOMEM, "out of memory");
+    struct rb_gpu_bdpt_sample *s =
+        (struct rb_gpu_bdpt_sample *)((char *)b->samples.mapped + slot * b->sample_block_bytes);
     for (uint32_t i = 0; i < rows; i++) {
         uint32_t u[2], l[2];
         bool is_vpl = i < b->vpl_count;
-        uint32_t index = is_vpl ? i : i - b->vpl_count;
+        uint32_t index =
+            is_vpl ? block * b->vpl_count + i : block * b->bundle_count + (i - b->vpl_count);
         if (is_vpl) {
             rb_qmc_point2(STREAM_VPL_LIGHT, index, l);
             rb_qmc_point2(STREAM_VPL_DIRECTION, index, u);
@@ -104,10 +164,6 @@ static enum rb_status upload_samples(struct rb_gpu *gpu, struct rb_bdpt_frame *b
             s[i].u[1] = rb_qmc_float(u[1]);
         }
     }
-    enum rb_status st = rb_gpu_buffer_upload(gpu, &b->samples, s,
-                                             (VkDeviceSize)(rows ? rows : 1) * sizeof(*s), err);
-    free(s);
-    return st;
 }
 
 /* The emissive triangles (a material whose emissive factor is above zero), as corners in the
@@ -162,13 +218,18 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
     enum rb_status st = upload_emitters(it, b, err);
     if (st)
         return st;
+    VkDeviceSize align = gpu->props.limits.minStorageBufferOffsetAlignment;
+    b->sample_block_bytes = (VkDeviceSize)(kv + kb) * sizeof(struct rb_gpu_bdpt_sample);
+    if (align > 1)
+        b->sample_block_bytes = (b->sample_block_bytes + align - 1) / align * align;
+    VkDeviceSize sample_bytes = b->sample_block_bytes * b->cache_count;
     /* With emitters, VPL i's bounce is VPL K_v + i. */
     b->has_bounce = b->emitter_count > 0 && b->vpl_count > 0;
     uint32_t all = b->has_bounce ? 2 * kv : kv;
     if ((st = rb_frame_buffer(gpu, 8 * sizeof(uint32_t), STORAGE, false, "bdpt.bounds", &b->bounds,
                               err)) ||
-        (st = rb_frame_buffer(gpu, (VkDeviceSize)(kv + kb) * sizeof(struct rb_gpu_bdpt_sample),
-                              STORAGE, false, "bdpt.samples", &b->samples, err)) ||
+        (st =
+             rb_frame_buffer(gpu, sample_bytes, STORAGE, true, "bdpt.samples", &b->samples, err)) ||
         (st = rb_frame_buffer(gpu, RB_MAX_LIGHTS * sizeof(struct rb_gpu_bdpt_light), STORAGE, true,
                               "bdpt.lights", &b->lights, err)) ||
         (st = rb_frame_buffer(gpu, all * sizeof(struct rb_gpu_vpl), STORAGE, false, "bdpt.vpls",
@@ -188,9 +249,10 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
         (st = rb_frame_buffer(gpu, kb * sizeof(struct rb_gpu_list_counter), STORAGE, true,
                               "bdpt.usage", &d->usage, err)) ||
         (st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_bdpt_emit_info), STORAGE, false,
-                              "bdpt.emit_info", &b->emit_info, err)) ||
-        (st = upload_samples(gpu, b, err)))
+                              "bdpt.emit_info", &b->emit_info, err)))
         return st;
+    for (uint32_t c = 0; c < b->cache_count; c++)
+        fill_samples(b, c, c);
 
     const VkImageUsageFlags target =
         VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT;
@@ -234,25 +296,52 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
     uint32_t sw = b->sub_width_px * b->interleave, sh = b->sub_height_px * b->interleave;
     static const char *const split_names[RB_BDPT_SPLIT_COUNT] = {
         "bdpt.split.position", "bdpt.split.normal", "bdpt.split.fresnel", "bdpt.split.geometric"};
-    static const char *const light_names[3][RB_BDPT_LIGHT_COUNT] = {
+    static const char *const light_names[4][RB_BDPT_LIGHT_COUNT] = {
         {"bdpt.accum.direct_diffuse", "bdpt.accum.direct_specular", "bdpt.accum.indirect_diffuse",
          "bdpt.accum.indirect_specular"},
         {"bdpt.gathered.direct_diffuse", "bdpt.gathered.direct_specular",
          "bdpt.gathered.indirect_diffuse", "bdpt.gathered.indirect_specular"},
-        {"bdpt.filtered.direct_diffuse", "bdpt.filtered.direct_specular",
-         "bdpt.filtered.indirect_diffuse", "bdpt.filtered.indirect_specular"}};
+        {"bdpt.cache.direct_diffuse", "bdpt.cache.direct_specular", "bdpt.cache.indirect_diffuse",
+         "bdpt.cache.indirect_specular"},
+        {"bdpt.light.direct_diffuse", "bdpt.light.direct_specular", "bdpt.light.indirect_diffuse",
+         "bdpt.light.indirect_specular"}};
     const VkFormat f = VK_FORMAT_R32G32B32A32_SFLOAT;
     for (int i = 0; i < RB_BDPT_SPLIT_COUNT && st == RB_OK; i++)
         st = rb_frame_image(gpu, sw, sh, 1, f, storage, false, split_names[i], &b->split[i], err);
+    uint32_t w = frame->width_px, h = frame->height_px, l = b->cache_count;
     for (int i = 0; i < RB_BDPT_LIGHT_COUNT && st == RB_OK; i++)
         if ((st = rb_frame_image(gpu, sw, sh, 1, f, storage, false, light_names[0][i], &b->accum[i],
                                  err)) == RB_OK &&
-            (st = rb_frame_image(gpu, frame->width_px, frame->height_px, 1, f, storage, false,
-                                 light_names[1][i], &b->gathered[i], err)) == RB_OK)
-            st = rb_frame_image(gpu, frame->width_px, frame->height_px, 1, f, storage, false,
-                                light_names[2][i], &b->filtered[i], err);
+            (st = rb_frame_image(gpu, w, h, 1, f, storage, false, light_names[1][i],
+                                 &b->gathered[i], err)) == RB_OK &&
+            (st = rb_frame_image(gpu, w, h, l, f, storage, true, light_names[2][i], &b->filtered[i],
+                                 err)) == RB_OK)
+            st = rb_frame_image(gpu, w, h, 1, f, storage, false, light_names[3][i], &b->light[i],
+                                err);
+    if (st == RB_OK)
+        st = rb_frame_image(gpu, w, h, l, f, storage | VK_IMAGE_USAGE_TRANSFER_DST_BIT, true,
+                            "bdpt.reproject", &b->reproject, err);
+    if (st == RB_OK)
+        st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_bdpt_history),
+                             VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "bdpt.history", &b->history,
+                             err);
+    if (st == RB_OK)
+        st = rb_frame_buffer(gpu, (VkDeviceSize)w * h * sizeof(float), STORAGE, true, "bdpt.hits",
+                             &b->hits, err);
+    static const char *const jittered_names[RB_GBUFFER_COLOR_COUNT] = {
+        "bdpt.gbuffer.position", "bdpt.gbuffer.normal",   "bdpt.gbuffer.albedo",
+        "bdpt.gbuffer.specular", "bdpt.gbuffer.emission", "bdpt.gbuffer.motion"};
+    for (int i = 0; i < RB_GBUFFER_COLOR_COUNT && st == RB_OK && l > 1; i++)
+        st = rb_frame_image(gpu, w, h, 1, rb_gbuffer_formats[i],
+                            VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT, false,
+                            jittered_names[i], &d->jittered[i], err);
+    if (st == RB_OK && l > 1)
+        st = rb_frame_image(gpu, w, h, 1, VK_FORMAT_D32_SFLOAT,
+                            VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, false,
+                            "bdpt.gbuffer.depth", &d->jittered_depth, err);
     if (st)
         return st;
+    b->gbuffer = l > 1 ? d->jittered : frame->gbuffer;
 
     VkCommandBuffer cmd;
     if ((st = rb_gpu_oneshot_begin(gpu, &cmd, err)))
@@ -272,7 +361,17 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
                              VK_IMAGE_LAYOUT_GENERAL);
         rb_gpu_image_barrier(gpu, cmd, &b->filtered[i], VK_IMAGE_LAYOUT_UNDEFINED,
                              VK_IMAGE_LAYOUT_GENERAL);
+        rb_gpu_image_barrier(gpu, cmd, &b->light[i], VK_IMAGE_LAYOUT_UNDEFINED,
+                             VK_IMAGE_LAYOUT_GENERAL);
     }
+    rb_gpu_image_barrier(gpu, cmd, &b->reproject, VK_IMAGE_LAYOUT_UNDEFINED,
+                         VK_IMAGE_LAYOUT_GENERAL);
+    for (int i = 0; i < RB_GBUFFER_COLOR_COUNT && l > 1; i++)
+        rb_gpu_image_barrier(gpu, cmd, &d->jittered[i], VK_IMAGE_LAYOUT_UNDEFINED,
+                             VK_IMAGE_LAYOUT_GENERAL);
+    if (l > 1)
+        rb_gpu_image_barrier(gpu, cmd, &d->jittered_depth, VK_IMAGE_LAYOUT_UNDEFINED,
+                             VK_IMAGE_LAYOUT_GENERAL);
     return rb_gpu_oneshot_end(gpu, cmd, err);
 }
 
@@ -305,7 +404,12 @@ static enum rb_status create(struct rb_integrator *it, void **state, struct rb_e
         .strategies = job->strategies ? job->strategies : RB_BDPT_STRATEGIES_MIS,
         .scene_centre = {0.5f * (lo.x + hi.x), 0.5f * (lo.y + hi.y), 0.5f * (lo.z + hi.z)},
         .scene_radius = 0.5f * diag,
+        .cache_count = cache_count(it->job),
     };
+    for (uint32_t i = 0; i < RB_BDPT_MAX_CACHES; i++) {
+        d->written[i] = INT_MIN;
+        cache_offset(b->cache_count, i, d->offset_px[i]);
+    }
     static const struct rb_view_variant variants[] = {
         {RB_VIEW_KIND_PERSPECTIVE, RB_VIEW_OUTPUT_RSM},
         {RB_VIEW_KIND_ORTHOGRAPHIC, RB_VIEW_OUTPUT_RSM},
@@ -319,7 +423,9 @@ static enum rb_status create(struct rb_integrator *it, void **state, struct rb_e
                                                               .variant_count = COUNT(variants),
                                                               .debug_name = "bdpt.view"},
                                   &d->views, err)) ||
-        (st = rb_pass_bdpt_create(it->gpu, &d->passes, err)) || (st = make_resources(it, d, err))) {
+        (st = rb_pass_bdpt_create(it->gpu, &d->passes, err)) ||
+        (st = rb_pass_reproject_create(it->gpu, &d->reproject, err)) ||
+        (st = make_resources(it, d, err))) {
         destroy(it, d);
         return st;
     }
@@ -529,15 +635,14 @@ static void record_connect(struct rb_integrator *it, struct bdpt *d, VkCommandBu
     rb_integrator_pass_end(it, cmd);
 }
 
-static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
-                   const struct rb_frame_ctx *ctx)
+/* Cache b->slot: everything from the RSMs to the filter, on the cache's G-buffer (b->gbuffer),
+ * with the slot's block of the sampling table. */
+static void record_cache(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer cmd,
+                         const struct rb_frame_ctx *ctx)
 {
-    struct bdpt *d = state;
     struct rb_bdpt_frame *b = &d->b;
     struct rb_frame *frame = &it->frame;
-    const struct rb_gpu_image *gb = frame->gbuffer;
-    if (!rb_base_record_direct(it, &d->base, cmd, ctx))
-        return;
+    const struct rb_gpu_image *gb = b->gbuffer;
     write_lights(it, b, ctx->moment);
     record_rsm(it, d, cmd, ctx);
 
@@ -626,7 +731,7 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
     for (int i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
         split[count++] = (struct rb_gpu_access){.image = &b->accum[i], .use = RB_GPU_COMPUTE_WRITE};
     rb_integrator_pass_begin(it, cmd, "split", split, count);
-    rb_pass_bdpt_split_record(d->passes, cmd, frame, b);
+    rb_pass_bdpt_split_record(d->passes, cmd, b);
     rb_integrator_pass_end(it, cmd);
 
     uint32_t loops = b->vpl_count > b->bundle_count ? b->vpl_count : b->bundle_count;
@@ -663,8 +768,142 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
     rb_integrator_pass_begin(it, cmd, "filter", filter, COUNT(filter));
     rb_pass_bdpt_filter_record(d->passes, cmd, frame, b);
     rb_integrator_pass_end(it, cmd);
+}
 
-    rb_base_record_output(it, &d->base, cmd, b->filtered);
+/* What reproject and reconstruct read of the caches this frame, by age (the cache written a
+ * frames ago) and by slot. A cache counts when its slot holds frame f - a, written in this
+ * run (a warm-up included) and not before the sequence's start. */
+static void write_history(const struct rb_integrator *it, struct bdpt *d, int f)
+{
+    const struct rb_bdpt_frame *b = &d->b;
+    const struct rb_job_bdpt *job = &it->job->integrator.bdpt;
+    struct rb_gpu_bdpt_history *h = b->history.mapped;
+    uint32_t l = b->cache_count, mask = 1u; /* age 0: this frame's, written now */
+    memset(h, 0, sizeof(*h));
+    for (uint32_t a = 0; a < l; a++) {
+        uint32_t slot = wrap((int64_t)f - a, l);
+        memcpy(h->view_proj[a], d->then[slot].view_proj.m, sizeof(h->view_proj[a]));
+        memcpy(h->depth_row[a], d->then[slot].depth_row, sizeof(h->depth_row[a]));
+        if (a > 0 && d->written[slot] == f - (int)a)
+            mask |= 1u << a;
+        h->offset[a][0] = d->offset_px[a][0];
+        h->offset[a][1] = d->offset_px[a][1];
+    }
+    h->info[0] = l;
+    h->info[1] = mask;
+    h->info[2] =
+        job->hit_test == RB_BDPT_HIT_BINARY ? RB_BDPT_HIT_TEST_BINARY : RB_BDPT_HIT_TEST_GAUSSIAN;
+    h->info[3] = wrap(f, l);
+    h->params[0] = 2.0f * job->hit_variance;
+    h->params[1] = job->hit_epsilon;
+}
+
+/* Frame f's camera, for the frames that reproject into it while its cache lives. */
+static void remember_camera(struct rb_integrator *it, struct bdpt *d,
+                            const struct rb_frame_ctx *ctx)
+{
+    const struct rb_camera *cam = &ctx->moment->camera;
+    struct camera_then *t = &d->then[wrap(ctx->frame, d->b.cache_count)];
+    struct rb_mat4 proj = rb_frame_projection(&it->frame, cam);
+    t->view_proj = rb_mat4_mul(&proj, &cam->world_to_camera);
+    for (int c = 0; c < 4; c++)
+        t->depth_row[c] = -cam->world_to_camera.m[c][2];
+}
+
+static void record_reproject(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer cmd,
+                             const struct rb_frame_ctx *ctx)
+{
+    struct rb_frame *frame = &it->frame;
+    struct rb_bdpt_frame *b = &d->b;
+    const struct rb_frame_slot *slots[RB_BDPT_MAX_CACHES];
+    struct rb_gpu_access uses[5 + RB_BDPT_MAX_CACHES] = {
+        {.buffer = &frame->globals, .use = RB_GPU_GRAPHICS_UNIFORM},
+        {.buffer = &b->history, .use = RB_GPU_GRAPHICS_UNIFORM},
+        {.buffer = &frame->indices, .use = RB_GPU_INDEX_READ},
+        {.image = &frame->depth, .use = RB_GPU_DEPTH_ATTACHMENT},
+        {.image = &b->reproject, .use = RB_GPU_FRAGMENT_READ_WRITE},
+    };
+    uint32_t count = 5;
+    for (uint32_t a = 0; a < b->cache_count; a++) {
+        slots[a] = &frame->slots[wrap((int64_t)ctx->frame - a, frame->slot_count)];
+        uses[count++] =
+            (struct rb_gpu_access){.buffer = &slots[a]->vertices, .use = RB_GPU_VERTEX_READ};
+    }
+    rb_integrator_pass_begin(it, cmd, "reproject", uses, count);
+    rb_pass_reproject_record(d->reproject, cmd, frame,
+                             &(struct rb_pass_reproject_in){.history = &b->history,
+                                                            .slots = slots,
+                                                            .age_count = b->cache_count,
+                                                            .target = &b->reproject});
+    rb_integrator_pass_end(it, cmd);
+}
+
+static void record_reconstruct(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer cmd)
+{
+    struct rb_frame *frame = &it->frame;
+    struct rb_bdpt_frame *b = &d->b;
+    struct rb_gpu_access uses[4 + 2 * RB_BDPT_LIGHT_COUNT] = {
+        {.buffer = &b->history, .use = RB_GPU_COMPUTE_UNIFORM},
+        {.image = &frame->gbuffer[RB_GB_POSITION], .use = RB_GPU_COMPUTE_READ},
+        {.image = &b->reproject, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &b->hits, .use = RB_GPU_COMPUTE_WRITE},
+    };
+    uint32_t count = 4;
+    for (int i = 0; i < RB_BDPT_LIGHT_COUNT; i++) {
+        uses[count++] =
+            (struct rb_gpu_access){.image = &b->filtered[i], .use = RB_GPU_COMPUTE_READ};
+        uses[count++] = (struct rb_gpu_access){.image = &b->light[i], .use = RB_GPU_COMPUTE_WRITE};
+    }
+    rb_integrator_pass_begin(it, cmd, "reconstruct", uses, count);
+    rb_pass_bdpt_reconstruct_record(d->passes, cmd, frame, b);
+    rb_integrator_pass_end(it, cmd);
+    /* the hit ratios, for collect */
+    rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
+                          VK_ACCESS_2_HOST_READ_BIT);
+}
+
+/* A frame: animate; then, for a frame whose output is wanted, the centred G-buffer and where its
+ * surfaces were in the caches' frames; shadow maps; direct light; the cache this frame writes
+ * (at its subpixel offset); the caches' reconstruction and output. A warm-up frame stops after
+ * its cache, and fills one only when later frames read it (l > 1) and it is not before the
+ * sequence's start (the job file's first frame): a chunk's first frame then has the caches the
+ * same frame of a whole run has. */
+static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
+                   const struct rb_frame_ctx *ctx)
+{
+    struct bdpt *d = state;
+    struct rb_bdpt_frame *b = &d->b;
+    uint32_t l = b->cache_count, slot = wrap(ctx->frame, l);
+    remember_camera(it, d, ctx);
+    rb_base_record_animate(it, d->base.animate, cmd, ctx->cur);
+    if (ctx->is_warmup && (l == 1 || ctx->frame < it->job->sequence_start)) {
+        d->written[slot] = INT_MIN;
+        return;
+    }
+    if (!ctx->is_warmup) {
+        write_history(it, d, ctx->frame);
+        rb_base_record_gbuffer(it, &d->base, cmd, ctx, NULL);
+        record_reproject(it, d, cmd, ctx);
+    }
+    rb_base_record_shadow(it, &d->base, cmd, ctx);
+    if (!ctx->is_warmup)
+        rb_base_record_direct_light(it, &d->base, cmd);
+    if (l > 1)
+        rb_base_record_gbuffer(it, &d->base, cmd, ctx,
+                               &(struct rb_gbuffer_target){
+                                   .colors = d->jittered,
+                                   .depth = &d->jittered_depth,
+                                   .offset_px = {d->offset_px[slot][0], d->offset_px[slot][1]}});
+    b->slot = slot;
+    if (it->job->integrator.bdpt.samples == RB_BDPT_SAMPLES_FRESH)
+        fill_samples(b, slot, (uint32_t)ctx->frame);
+    record_cache(it, d, cmd, ctx);
+    d->written[slot] = ctx->frame;
+    if (ctx->is_warmup)
+        return;
+    record_reconstruct(it, d, cmd);
+    rb_base_record_output(it, &d->base, cmd, b->light);
 }
 
 /* The ray-bundle pool's use, bundle by bundle: the most nodes a bundle asked for, and the
@@ -682,6 +921,7 @@ static void collect(struct rb_integrator *it, void *state, struct rb_frame_resul
         overflowed += usage[k].dropped > 0;
     }
     out->nonfinite_count = rb_pass_output_nonfinite_count(d->base.output);
+    out->hits = d->b.hits.mapped;
     out->bundle_nodes_max = most;
     out->bundle_nodes_capacity = d->b.bundle.capacity_nodes;
     out->bundle_nodes_dropped = dropped;

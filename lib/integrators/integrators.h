@@ -33,16 +33,23 @@ enum rb_status rb_integrator_create(const struct rb_integrator_desc *desc,
                                     struct rb_integrator **out, struct rb_err *err);
 
 /* How many earlier frames a frame's state depends on (direct: 1, its motion vectors read the
- * previous frame's vertices; an integrator with temporal caches: its cache count - 1). */
+ * previous frame's vertices; bdpt: its cache count - 1, at least 1). */
 uint32_t rb_integrator_history_frames(const struct rb_integrator *it);
 
 /* Renders one frame (time = frame / rate) and reads it back.
- * The contract of history: the state a frame is rendered from is a function of that frame and
- * the history_frames frames before it, nothing earlier. When the frame before this one was not
- * the last rendered (the first frame of a run or of a chunk, or a jump), the driver first
- * renders the history_frames frames before it as warm-up frames, recording what they leave for
- * later frames and writing nothing; so a chunk of a sequence renders the same bits as the same
- * frames of a whole run, whatever the history length. */
+ * The contract of history. A frame does depend on earlier ones: bdpt's output reconstructs its
+ * indirect light from the temporal caches the frames before it wrote. What it may depend on is
+ * bounded: the output of frame f is a function of the job and of frames f - history_frames to f
+ * (their moments, and what their passes computed), nothing earlier and nothing about how the
+ * run got there. An integrator keeps that promise by holding no state a frame reads that a
+ * frame more than history_frames back wrote (bdpt: a cache counts only while it is one of the
+ * last l frames', by the frame it records; a frame before the job file's first frame,
+ * job->sequence_start, fills none when it is only a warm-up). The driver keeps the rest: when
+ * the frame before this one was not the last rendered (the first frame of a run or of a chunk,
+ * a jump in a frame list, --resume after a kill), it first renders the history_frames frames
+ * before it as warm-up frames (ctx.is_warmup), which record what later frames read and write
+ * nothing; so any chunk of a sequence renders the same bits as the same frames of a whole run,
+ * beauty, layers and sidecars alike. */
 enum rb_status rb_integrator_render(struct rb_integrator *it, int frame,
                                     struct rb_frame_result *out, struct rb_err *err);
 

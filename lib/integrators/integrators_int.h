@@ -121,6 +121,14 @@ struct rb_base {
 
 enum rb_status rb_base_create(struct rb_integrator *it, struct rb_base *b, struct rb_err *err);
 void rb_base_destroy(struct rb_base *b);
+/* The frame's G-buffer pass into target (NULL: the frame's own, at pixel centres, the pass
+ * "gbuffer"; else "cache_gbuffer"); its shadow maps; its direct light, from the frame's own
+ * G-buffer. */
+void rb_base_record_gbuffer(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
+                            const struct rb_frame_ctx *ctx, const struct rb_gbuffer_target *target);
+void rb_base_record_shadow(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
+                           const struct rb_frame_ctx *ctx);
+void rb_base_record_direct_light(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd);
 /* Records animate and, unless the frame is a warm-up, gbuffer, shadow and direct. Returns
  * whether it recorded the frame's passes (false: a warm-up, which records nothing more). */
 bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,

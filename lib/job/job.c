@@ -66,6 +66,8 @@ static const char *const interp_names[] = {NULL, "linear", "catmull-rom"};
 static const char *const path_names[] = {NULL, "full", "direct", "bdpt"};
 static const char *const pixel_filter_names[] = {NULL, "center", "box"};
 static const char *const strategy_names[] = {NULL, "mis", "vpl", "bundle"};
+static const char *const hit_test_names[] = {NULL, "gaussian", "binary"};
+static const char *const samples_names[] = {NULL, "periodic", "fresh"};
 static const char *const light_names[] = {NULL, "point", "spot", "directional"};
 static const char *const default_light_names[] = {NULL, "auto", "on", "off"};
 
@@ -216,6 +218,19 @@ static const struct key keys[] = {
     K("integrator.bdpt.strategies", KT_ENUM, JOB(integrator.bdpt.strategies), NOLO, NOHI, "mis", 0,
       "bdpt: mis weights VPL and bundle strategies; vpl or bundle use one alone",
       ENUM(strategy_names)),
+    K("integrator.bdpt.caches", KT_UINT, JOB(integrator.bdpt.caches), 1, 8, "4", 0,
+      "bdpt: temporal caches, one per subpixel offset, each rewritten every caches-th frame"),
+    K("integrator.bdpt.hit_variance", KT_FLOAT, JOB(integrator.bdpt.hit_variance), 1e-12, NOHI,
+      "0.00005", 0,
+      "bdpt: sigma^2 of the cache hit weight exp(-log^2(z / z_cached) / (2 sigma^2))"),
+    K("integrator.bdpt.hit_test", KT_ENUM, JOB(integrator.bdpt.hit_test), NOLO, NOHI, "gaussian", 0,
+      "bdpt: cache hit weight: gaussian (log-space) or binary (|z - z_cached| < hit_epsilon)",
+      ENUM(hit_test_names)),
+    K("integrator.bdpt.hit_epsilon", KT_FLOAT, JOB(integrator.bdpt.hit_epsilon), 0, NOHI, "0.01", 0,
+      "bdpt: the binary cache hit test's bound on the depth difference, in metres"),
+    K("integrator.bdpt.samples", KT_ENUM, JOB(integrator.bdpt.samples), NOLO, NOHI, "periodic", 0,
+      "bdpt: periodic (cache i always the same points) or fresh (new points every frame)",
+      ENUM(samples_names)),
     K("integrator.reference.spp", KT_UINT, JOB(integrator.reference.spp), 1, 1048576, "64", 0,
       "reference: samples per pixel"),
     K("integrator.reference.max_bounces", KT_UINT, JOB(integrator.reference.max_bounces), 0, 64,
@@ -1270,6 +1285,11 @@ void rb_job_rehash(struct rb_job *job)
         h = h_f32(h, b->vpl_bias);
         h = h_u32(h, b->view_triangles);
         h = h_u32(h, (uint32_t)b->strategies);
+        h = h_u32(h, b->caches);
+        h = h_f32(h, b->hit_variance);
+        h = h_u32(h, (uint32_t)b->hit_test);
+        h = h_f32(h, b->hit_epsilon);
+        h = h_u32(h, (uint32_t)b->samples);
     }
     job->hash = h;
 }
@@ -1324,6 +1344,7 @@ enum rb_status rb_job_parse(const char *name, const char *text, size_t size, con
             goto out;
     }
     c.doc = NULL;
+    c.job->sequence_start = c.job->frame_start;
     if ((st = apply_overrides(&c, overrides, override_count)))
         goto out;
     if ((st = validate(&c)))
@@ -1377,6 +1398,7 @@ static enum rb_status quick_look(const char *path, const struct rb_job_override 
     snprintf(c.job->output, olen, "out/%.*s/frame.####.exr", (int)stem, base);
     c.marks[key_index("scene")] = (struct mark){NULL, 0, 0, ++c.seq};
     c.marks[key_index("output")] = (struct mark){NULL, 0, 0, ++c.seq};
+    c.job->sequence_start = c.job->frame_start;
     if ((st = apply_overrides(&c, overrides, override_count)))
         goto out;
     if ((st = validate(&c)))

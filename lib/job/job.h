@@ -41,6 +41,20 @@ enum rb_bdpt_strategies {
     RB_BDPT_STRATEGIES_BUNDLE,      /* one-bounce paths from bundles alone, unweighted */
 };
 
+/* How bdpt detects that a pixel's surface is in a temporal cache (seed 000, section A). */
+enum rb_bdpt_hit_test {
+    RB_BDPT_HIT_DEFAULT = 0, /* resolves to GAUSSIAN */
+    RB_BDPT_HIT_GAUSSIAN,    /* equation (3): exp(-log^2(z / z_cached) / (2 hit_variance)) */
+    RB_BDPT_HIT_BINARY,      /* equation (2): 1 when |z - z_cached| < hit_epsilon, else 0 */
+};
+
+/* Which quasi-random points bdpt's caches use, frame after frame. */
+enum rb_bdpt_samples {
+    RB_BDPT_SAMPLES_DEFAULT = 0, /* resolves to PERIODIC */
+    RB_BDPT_SAMPLES_PERIODIC,    /* cache i always the i-th block: the seed's, flicker-free */
+    RB_BDPT_SAMPLES_FRESH,       /* frame f the f-th block: new points every frame */
+};
+
 /* Where the reference's samples pass through a pixel. */
 enum rb_pixel_filter {
     RB_PIXEL_FILTER_DEFAULT = 0, /* resolves to CENTER */
@@ -89,6 +103,9 @@ struct rb_job {
     uint32_t layer_mask; /* the same as bits of enum rb_layer; resolved by the parser */
     uint32_t width_px, height_px;
     int frame_start, frame_end; /* inclusive; frame_end == -1: to the end of the animation */
+    int sequence_start;         /* frames.start as the job file has it, before the command line's
+                                 * overrides (--frames, --set): where the sequence begins, which a
+                                 * chunk or a frame list does not move */
     double rate_fps;
 
     struct {
@@ -143,6 +160,11 @@ struct rb_job {
             uint32_t view_triangles;   /* triangle budget of the small views' simplified mesh;
                                         * 0: the full mesh; default 50000 */
             enum rb_bdpt_strategies strategies;
+            uint32_t caches;    /* l: temporal caches, one per subpixel offset, default 4 */
+            float hit_variance; /* sigma^2 of equation (3), default 0.00005 */
+            enum rb_bdpt_hit_test hit_test;
+            float hit_epsilon; /* equation (2)'s bound on the depth difference, in metres */
+            enum rb_bdpt_samples samples;
         } bdpt;
         struct {
             uint32_t spp;         /* samples per pixel, default 64 */

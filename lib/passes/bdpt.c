@@ -13,10 +13,11 @@
 #include "bdpt_filter.comp.h"
 #include "bdpt_gather.comp.h"
 #include "bdpt_generate.comp.h"
+#include "bdpt_reconstruct.comp.h"
 #include "bdpt_split.comp.h"
 
 struct rb_pass_bdpt {
-    struct rb_pass bounds, emitters, generate, bounce, split, connect, gather, filter;
+    struct rb_pass bounds, emitters, generate, bounce, split, connect, gather, filter, reconstruct;
 };
 
 static const struct rb_pass_binding bounds_bindings[] = {
@@ -137,6 +138,23 @@ static const struct rb_pass_binding filter_bindings[] = {
 };
 _Static_assert(COUNT(filter_bindings) == RB_BIND_BDPT_FILTER_COUNT, "filter bindings");
 
+static const struct rb_pass_binding reconstruct_bindings[] = {
+    RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_HISTORY, UNIFORM_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_GB_POSITION, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_REPROJECT, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_CACHE + 0, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_CACHE + 1, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_CACHE + 2, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_CACHE + 3, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_OUT + 0, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_OUT + 1, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_OUT + 2, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_OUT + 3, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_HITS, STORAGE_BUFFER),
+};
+_Static_assert(COUNT(reconstruct_bindings) == RB_BIND_BDPT_RECONSTRUCT_COUNT,
+               "reconstruct bindings");
+
 #define COMPUTE(field, nm, table, push, spv_name)                                                  \
     rb_pass_compute_init(gpu,                                                                      \
                          &(struct rb_pass_compute_desc){.name = (nm),                              \
@@ -165,7 +183,9 @@ enum rb_status rb_pass_bdpt_create(struct rb_gpu *gpu, struct rb_pass_bdpt **out
         (st = COMPUTE(connect, "connect", connect_bindings, sizeof(struct rb_gpu_bdpt_connect_push),
                       rb_spv_bdpt_connect_comp)) ||
         (st = COMPUTE(gather, "gather", gather_bindings, image_push, rb_spv_bdpt_gather_comp)) ||
-        (st = COMPUTE(filter, "filter", filter_bindings, image_push, rb_spv_bdpt_filter_comp))) {
+        (st = COMPUTE(filter, "filter", filter_bindings, image_push, rb_spv_bdpt_filter_comp)) ||
+        (st = COMPUTE(reconstruct, "reconstruct", reconstruct_bindings, 0,
+                      rb_spv_bdpt_reconstruct_comp))) {
         rb_pass_bdpt_destroy(p);
         return st;
     }
@@ -177,6 +197,7 @@ void rb_pass_bdpt_destroy(struct rb_pass_bdpt *p)
 {
     if (!p)
         return;
+    rb_pass_release(&p->reconstruct);
     rb_pass_release(&p->filter);
     rb_pass_release(&p->gather);
     rb_pass_release(&p->connect);
@@ -224,7 +245,7 @@ void rb_pass_bdpt_bounds_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                           VK_ACCESS_2_SHADER_STORAGE_READ_BIT |
                               VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
     struct rb_pass_bindings bind = {.pass = &p->bounds};
-    rb_pass_bind_image(&bind, RB_BIND_BDPT_BOUNDS_POSITION, frame->gbuffer[RB_GB_POSITION].view,
+    rb_pass_bind_image(&bind, RB_BIND_BDPT_BOUNDS_POSITION, b->gbuffer[RB_GB_POSITION].view,
                        VK_NULL_HANDLE);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_BOUNDS_OUT, &b->bounds);
     rb_pass_record_bindings(cmd, &bind);
@@ -252,7 +273,8 @@ void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
 {
     struct rb_pass_bindings bind = {.pass = &p->generate};
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_BOUNDS, &b->bounds);
-    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_SAMPLES, &b->samples);
+    rb_pass_bind_buffer_range(&bind, RB_BIND_BDPT_GENERATE_SAMPLES, &b->samples,
+                              b->slot * b->sample_block_bytes, b->sample_block_bytes);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_LIGHTS, &frame->lights);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_BDPT_LIGHTS, &b->lights);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_RSM_VIEWS, &frame->shadow_views);
@@ -307,9 +329,9 @@ void rb_pass_bdpt_bounce_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
 }
 
 void rb_pass_bdpt_split_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
-                               const struct rb_frame *frame, const struct rb_bdpt_frame *b)
+                               const struct rb_bdpt_frame *b)
 {
-    const struct rb_gpu_image *gb = frame->gbuffer;
+    const struct rb_gpu_image *gb = b->gbuffer;
     struct rb_pass_bindings bind = {.pass = &p->split};
     rb_pass_bind_image(&bind, RB_BIND_BDPT_SPLIT_GB_POSITION, gb[RB_GB_POSITION].view,
                        VK_NULL_HANDLE);
@@ -395,17 +417,38 @@ void rb_pass_bdpt_gather_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
 void rb_pass_bdpt_filter_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                 const struct rb_frame *frame, const struct rb_bdpt_frame *b)
 {
-    const struct rb_gpu_image *gb = frame->gbuffer;
+    const struct rb_gpu_image *gb = b->gbuffer;
     struct rb_pass_bindings bind = {.pass = &p->filter};
     rb_pass_bind_image(&bind, RB_BIND_BDPT_FILTER_GB_POSITION, gb[RB_GB_POSITION].view,
                        VK_NULL_HANDLE);
     rb_pass_bind_image(&bind, RB_BIND_BDPT_FILTER_GB_NORMAL, gb[RB_GB_NORMAL].view, VK_NULL_HANDLE);
     for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++) {
         rb_pass_bind_image(&bind, RB_BIND_BDPT_FILTER_IN + i, b->gathered[i].view, VK_NULL_HANDLE);
-        rb_pass_bind_image(&bind, RB_BIND_BDPT_FILTER_OUT + i, b->filtered[i].view, VK_NULL_HANDLE);
+        rb_pass_bind_image(&bind, RB_BIND_BDPT_FILTER_OUT + i, b->filtered[i].layer_views[b->slot],
+                           VK_NULL_HANDLE);
     }
     rb_pass_record_bindings(cmd, &bind);
     struct rb_gpu_bdpt_image_push pc = image_push(b);
     push(cmd, &p->filter, &pc, sizeof(pc));
+    vkCmdDispatch(cmd, groups(frame->width_px, 8), groups(frame->height_px, 8), 1);
+}
+
+void rb_pass_bdpt_reconstruct_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                     const struct rb_frame *frame, const struct rb_bdpt_frame *b)
+{
+    struct rb_pass_bindings bind = {.pass = &p->reconstruct};
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_RECONSTRUCT_HISTORY, &b->history);
+    rb_pass_bind_image(&bind, RB_BIND_BDPT_RECONSTRUCT_GB_POSITION,
+                       frame->gbuffer[RB_GB_POSITION].view, VK_NULL_HANDLE);
+    rb_pass_bind_image(&bind, RB_BIND_BDPT_RECONSTRUCT_REPROJECT, b->reproject.view,
+                       VK_NULL_HANDLE);
+    for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++) {
+        rb_pass_bind_image(&bind, RB_BIND_BDPT_RECONSTRUCT_CACHE + i, b->filtered[i].view,
+                           VK_NULL_HANDLE);
+        rb_pass_bind_image(&bind, RB_BIND_BDPT_RECONSTRUCT_OUT + i, b->light[i].view,
+                           VK_NULL_HANDLE);
+    }
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_RECONSTRUCT_HITS, &b->hits);
+    rb_pass_record_bindings(cmd, &bind);
     vkCmdDispatch(cmd, groups(frame->width_px, 8), groups(frame->height_px, 8), 1);
 }

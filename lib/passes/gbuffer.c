@@ -49,6 +49,7 @@ enum rb_status rb_pass_gbuffer_create(struct rb_gpu *gpu, struct rb_pass_gbuffer
                     .depth_format = VK_FORMAT_D32_SFLOAT,
                     .cull = VK_CULL_MODE_NONE, /* single-sided materials discard back faces */
                 },
+            .push_bytes = sizeof(float[4]),
         },
         &p->pass, err);
     if (st) {
@@ -61,13 +62,15 @@ enum rb_status rb_pass_gbuffer_create(struct rb_gpu *gpu, struct rb_pass_gbuffer
 
 void rb_pass_gbuffer_record(struct rb_pass_gbuffer *p, VkCommandBuffer cmd,
                             const struct rb_frame *frame, const struct rb_frame_slot *cur,
-                            const struct rb_frame_slot *prev)
+                            const struct rb_frame_slot *prev,
+                            const struct rb_gbuffer_target *target)
 {
+    const struct rb_gpu_image *gb = target ? target->colors : frame->gbuffer;
     VkRenderingAttachmentInfo colors[RB_GBUFFER_COLOR_COUNT];
     for (int i = 0; i < RB_GBUFFER_COLOR_COUNT; i++)
         colors[i] = (VkRenderingAttachmentInfo){
             .sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
-            .imageView = frame->gbuffer[i].view,
+            .imageView = gb[i].view,
             .imageLayout = VK_IMAGE_LAYOUT_GENERAL,
             .loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
             .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
@@ -75,7 +78,7 @@ void rb_pass_gbuffer_record(struct rb_pass_gbuffer *p, VkCommandBuffer cmd,
         };
     VkRenderingAttachmentInfo depth = {
         .sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
-        .imageView = frame->depth.view,
+        .imageView = target ? target->depth->view : frame->depth.view,
         .imageLayout = VK_IMAGE_LAYOUT_GENERAL,
         .loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
         .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
@@ -99,8 +102,17 @@ void rb_pass_gbuffer_record(struct rb_pass_gbuffer *p, VkCommandBuffer cmd,
     rb_pass_bind_image(&b, RB_BIND_GBUFFER_LINEAR_TEXTURES, frame->linear_textures.view,
                        p->pass.gpu->linear_sampler);
 
+    /* Samples at + offset: the image moves by - offset, in clip space -2 offset / size, times w
+     * (gbuffer.vert). */
+    float jitter[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    if (target) {
+        jitter[0] = -2.0f * target->offset_px[0] / (float)frame->width_px;
+        jitter[1] = -2.0f * target->offset_px[1] / (float)frame->height_px;
+    }
     vkCmdBeginRendering(cmd, &ri);
     rb_pass_record_bindings(cmd, &b);
+    vkCmdPushConstants(cmd, p->pass.layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0, sizeof(jitter),
+                       jitter);
     VkViewport vp = {0, 0, (float)frame->width_px, (float)frame->height_px, 0.0f, 1.0f};
     VkRect2D sc = {{0, 0}, {frame->width_px, frame->height_px}};
     vkCmdSetViewport(cmd, 0, 1, &vp);

@@ -20,6 +20,7 @@ _Static_assert(sizeof(struct rb_gpu_view) == 96, "view layout");
 _Static_assert(sizeof(struct rb_gpu_view_push) == 48, "view push constants");
 _Static_assert(sizeof(struct rb_gpu_list_node) == 20, "list node layout: seed 000's struct Node");
 _Static_assert(sizeof(struct rb_gpu_list_counter) == 16, "list counter layout");
+_Static_assert(sizeof(struct rb_gpu_bdpt_history) == 800, "bdpt history layout (std140)");
 _Static_assert(sizeof(struct rb_gpu_vpl) == 80, "VPL layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_light) == 16, "bdpt light layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_sample) == 32, "bdpt sample layout");
@@ -113,10 +114,35 @@ void rb_pass_animate_destroy(struct rb_pass_animate *p);
 struct rb_pass_gbuffer;
 enum rb_status rb_pass_gbuffer_create(struct rb_gpu *gpu, struct rb_pass_gbuffer **out,
                                       struct rb_err *err);
+/* Where a G-buffer is drawn: RB_GBUFFER_COLOR_COUNT images and a depth image of the frame's
+ * size, and the subpixel offset of its samples from the pixel centres, in pixels (0, 0: the
+ * frame's own G-buffer; bdpt's temporal caches draw theirs at other offsets). */
+struct rb_gbuffer_target {
+    const struct rb_gpu_image *colors;
+    const struct rb_gpu_image *depth;
+    float offset_px[2];
+};
+/* Draws the G-buffer of cur (motion from prev) into target, or the frame's when NULL. */
 void rb_pass_gbuffer_record(struct rb_pass_gbuffer *p, VkCommandBuffer cmd,
                             const struct rb_frame *frame, const struct rb_frame_slot *cur,
-                            const struct rb_frame_slot *prev);
+                            const struct rb_frame_slot *prev,
+                            const struct rb_gbuffer_target *target);
 void rb_pass_gbuffer_destroy(struct rb_pass_gbuffer *p);
+
+/* reproject.c: where each pixel's surface was in the frames of bdpt's temporal caches. */
+struct rb_pass_reproject_in {
+    const struct rb_gpu_buffer *history;      /* struct rb_gpu_bdpt_history */
+    const struct rb_frame_slot *const *slots; /* age_count: frame f - a's slot at [a] */
+    uint32_t age_count;                       /* l, at most RB_BDPT_MAX_CACHES */
+    const struct rb_gpu_image *target;        /* RGBA32F, a layer per age (l), storage */
+};
+struct rb_pass_reproject;
+enum rb_status rb_pass_reproject_create(struct rb_gpu *gpu, struct rb_pass_reproject **out,
+                                        struct rb_err *err);
+/* Clears in->target and draws the frame's geometry against its G-buffer depth into it. */
+void rb_pass_reproject_record(struct rb_pass_reproject *p, VkCommandBuffer cmd,
+                              const struct rb_frame *frame, const struct rb_pass_reproject_in *in);
+void rb_pass_reproject_destroy(struct rb_pass_reproject *p);
 
 /* ---- raster views (view.c): the scene from many views, each into a layer ------------------- */
 
@@ -322,7 +348,20 @@ struct rb_bdpt_frame {
     struct rb_view_list bundle;                     /* one layer: the bundle being connected */
     struct rb_gpu_image split[RB_BDPT_SPLIT_COUNT]; /* sub_* x n in size */
     struct rb_gpu_image accum[RB_BDPT_LIGHT_COUNT]; /* split order, added to by connect */
-    struct rb_gpu_image gathered[RB_BDPT_LIGHT_COUNT], filtered[RB_BDPT_LIGHT_COUNT];
+    struct rb_gpu_image gathered[RB_BDPT_LIGHT_COUNT];
+
+    /* The temporal caches (seed 000, section A): the filter writes the light of cache `slot`
+     * (a layer of each array; the first one's alpha holds the depth), computed from `gbuffer`,
+     * the G-buffer at that cache's subpixel offset (the frame's own when l is 1); generate and
+     * bounce read that slot's block of the sampling table. */
+    uint32_t cache_count, slot;
+    VkDeviceSize sample_block_bytes;    /* a slot's rows, aligned for a storage offset */
+    const struct rb_gpu_image *gbuffer; /* RB_GBUFFER_COLOR_COUNT images */
+    struct rb_gpu_image filtered[RB_BDPT_LIGHT_COUNT]; /* the caches: a layer per slot */
+    struct rb_gpu_buffer history;                   /* struct rb_gpu_bdpt_history, host-visible */
+    struct rb_gpu_image reproject;                  /* RGBA32F, a layer per age (reproject.c) */
+    struct rb_gpu_image light[RB_BDPT_LIGHT_COUNT]; /* reconstructed: what output textures */
+    struct rb_gpu_buffer hits;                      /* a float per pixel, host-visible */
 };
 
 _Static_assert(RB_BDPT_STRATEGIES_MIS == RB_BDPT_MIS && RB_BDPT_STRATEGIES_VPL == RB_BDPT_VPL &&
@@ -349,7 +388,7 @@ void rb_pass_bdpt_bounce_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                 const struct rb_bdpt_frame *b);
 /* The G-buffer into n x n sub-images (b->split); zeroes b->accum. */
 void rb_pass_bdpt_split_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
-                               const struct rb_frame *frame, const struct rb_bdpt_frame *b);
+                               const struct rb_bdpt_frame *b);
 /* Iteration k: VPL k and bundle k (in b->bundle's list) with sub-image k mod n^2, added to
  * b->accum. */
 void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
@@ -358,8 +397,11 @@ void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
 /* b->accum back to image order, into b->gathered. */
 void rb_pass_bdpt_gather_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                 const struct rb_frame *frame, const struct rb_bdpt_frame *b);
-/* The geometry-aware filter of b->gathered into b->filtered. */
+/* The geometry-aware filter of b->gathered into cache b->slot of b->filtered. */
 void rb_pass_bdpt_filter_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                 const struct rb_frame *frame, const struct rb_bdpt_frame *b);
+/* Equation (1) over the caches into b->light, and the hit ratio into b->hits. */
+void rb_pass_bdpt_reconstruct_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                     const struct rb_frame *frame, const struct rb_bdpt_frame *b);
 
 #endif

@@ -100,6 +100,26 @@ struct rb_gpu_bdpt_bounce_push {
     RB_VEC4(scene);   /* xyz: the centre of the job's bounds; w: their radius */
 };
 
+/* The temporal caches (seed 000, section A; DESIGN.md "Temporal interleaved sampling"): at most
+ * this many, one reprojection target each. */
+#define RB_BDPT_MAX_CACHES 8
+
+/* What the reprojection and reconstruction passes know of the caches, by age a: the cache
+ * written a frames ago (frame f - a), which is slot (f - a) mod l. Host-written each frame. */
+struct rb_gpu_bdpt_history {
+    RB_MAT4(view_proj[RB_BDPT_MAX_CACHES]); /* frame f - a's camera, unjittered */
+    RB_VEC4(depth_row[RB_BDPT_MAX_CACHES]); /* its view depth: dot(depth_row, (x, 1)) */
+    RB_VEC4(offset[RB_BDPT_MAX_CACHES]);    /* by slot: xy, its samples' offset from the pixel
+                                             * centres, in pixels; zw unused */
+    RB_UVEC4(info);  /* l; which ages hold a cache (bit a); the hit test (RB_BDPT_HIT_*); the
+                      * slot this frame writes, f mod l */
+    RB_VEC4(params); /* 2 sigma^2 of the gaussian test; epsilon of the binary one; unused x2 */
+};
+
+/* info.z: the hit test, as enum rb_bdpt_hit_test. */
+#define RB_BDPT_HIT_TEST_GAUSSIAN 1u
+#define RB_BDPT_HIT_TEST_BINARY 2u
+
 /* Push constants of the split, gather and filter passes. */
 struct rb_gpu_bdpt_image_push {
     RB_UVEC4(split);  /* n, sub-image width, height, filter radius */

@@ -138,6 +138,22 @@
 #define RB_BIND_BDPT_FILTER_OUT 6 /* written: RB_BDPT_LIGHT_COUNT images */
 #define RB_BIND_BDPT_FILTER_COUNT 10
 
+/* reproject.vert and reproject.frag: each pixel's surface moved back to the caches' frames */
+#define RB_BIND_REPROJECT_GLOBALS 0
+#define RB_BIND_REPROJECT_HISTORY 1  /* rb_gpu_bdpt_history */
+#define RB_BIND_REPROJECT_OUT 2      /* written: a layer per age */
+#define RB_BIND_REPROJECT_VERTICES 3 /* RB_BDPT_MAX_CACHES: frame f - a's world vertices */
+#define RB_BIND_REPROJECT_COUNT 11
+
+/* bdpt_reconstruct.comp: equation (1) over the caches */
+#define RB_BIND_BDPT_RECONSTRUCT_HISTORY 0
+#define RB_BIND_BDPT_RECONSTRUCT_GB_POSITION 1
+#define RB_BIND_BDPT_RECONSTRUCT_REPROJECT 2
+#define RB_BIND_BDPT_RECONSTRUCT_CACHE 3 /* RB_BDPT_LIGHT_COUNT arrays, a layer per slot */
+#define RB_BIND_BDPT_RECONSTRUCT_OUT 7   /* written: RB_BDPT_LIGHT_COUNT images */
+#define RB_BIND_BDPT_RECONSTRUCT_HITS 11 /* written: a float per pixel, host-visible */
+#define RB_BIND_BDPT_RECONSTRUCT_COUNT 12
+
 /* brdf_table.comp (tests/unit/test_brdf_parity.c) */
 #define RB_BIND_BRDF_TABLE_IN 0
 #define RB_BIND_BRDF_TABLE_OUT 1

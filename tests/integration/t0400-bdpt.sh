@@ -9,9 +9,11 @@
 . tests/integration/lib.sh
 
 small="--frames 0 --size 64x36 -q"
-maps="--set integrator.bdpt.vpl_size=64 --set integrator.bdpt.rsm_size=64"
+# One temporal cache: a frame is its own, sampled at pixel centres, so these tests hold the
+# spatial estimator to the reference (t0440 tests the caches).
+maps="--set integrator.bdpt.vpl_size=64 --set integrator.bdpt.rsm_size=64 --set integrator.bdpt.caches=1"
 k() { # k N: N VPLs and N bundles
-    echo "--set integrator.bdpt.vpls=$1 --set integrator.bdpt.bundles=$1"
+    echo "--set integrator.bdpt.vpls=$1 --set integrator.bdpt.bundles=$1 --set integrator.bdpt.caches=1"
 }
 
 # shellcheck disable=SC2046

@@ -18,7 +18,8 @@ check "the copy of the demo room has no emissive material" \
 # A bright sky, warm on one side and blue on the other, over a dark ground.
 sky=topleft=1.2,1.1,0.9:topright=0.5,0.7,1.2:bottomleft=0.2,0.15,0.1:bottomright=0.1,0.1,0.15
 oiiotool --pattern "fill:$sky" 64x32 3 -d float -o "$T/s/sky.exr"
-# The demo's first camera key, the scene standing still; default_light is left at auto, which
+# The demo's first camera key, the scene standing still, one temporal cache (the spatial
+# estimator alone: t0440 tests the caches); default_light is left at auto, which
 # must see the environment as light.
 job() { # job NAME ENVIRONMENT: writes $T/s/NAME.yaml
     cat >"$T/s/$1.yaml" <<YAML
@@ -33,7 +34,7 @@ camera:
 animation: {speed: 0}
 scene_lights: false
 environment: $2
-integrator: {name: bdpt}
+integrator: {name: bdpt, bdpt: {caches: 1}}
 YAML
 }
 job sky '{color: [0.6, 0.7, 0.9]}'
