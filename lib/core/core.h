@@ -249,6 +249,8 @@ struct rb_frame_result {
     /* bdpt's ray-bundle node buffer (0 for other integrators): the most nodes one bundle
      * asked for, how many the buffer holds, and the fragments dropped because it was full */
     uint32_t bundle_nodes_max, bundle_nodes_capacity, bundle_nodes_dropped;
+    const float *hits; /* width_px x height_px floats, rows top to bottom: the temporal
+                        * caches' hit ratio, sum of h / l (bdpt); NULL: none */
 };
 
 #endif

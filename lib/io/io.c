@@ -912,6 +912,45 @@ static void json_string(struct text *t, const char *s)
     text_puts(t, "\"");
 }
 
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* The nearest-rank percentile p (1..100) of n >= 1 sorted values: the k-th smallest,
+ * k = ceil(p * n / 100), in integers so no rounding moves a rank. */
+static double nearest_rank(const float *sorted, size_t n, unsigned p)
+{
+    return sorted[(p * n + 99) / 100 - 1];
+}
+
+enum rb_status rb_io_hits_summarize(const float *values, size_t count, struct rb_io_hits *out,
+                                    struct rb_err *err)
+{
+    float *sorted = malloc((count ? count : 1) * sizeof(*sorted));
+    if (!sorted)
+        return rb_errf(err, RB_E_NOMEM, "out of memory for the hit ratios' percentiles");
+    double sum = 0.0;
+    size_t n = 0;
+    for (size_t i = 0; i < count; i++)
+        if (isfinite(values[i])) {
+            sum += values[i];
+            sorted[n++] = values[i];
+        }
+    if (n == 0) {
+        *out = (struct rb_io_hits){NAN, NAN, NAN, NAN};
+    } else {
+        qsort(sorted, n, sizeof(*sorted), cmp_float);
+        *out = (struct rb_io_hits){.mean = sum / (double)n,
+                                   .p5 = nearest_rank(sorted, n, 5),
+                                   .p50 = nearest_rank(sorted, n, 50),
+                                   .p95 = nearest_rank(sorted, n, 95)};
+    }
+    free(sorted);
+    return RB_OK;
+}
+
 enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *tm,
                                   struct rb_err *err)
 {
@@ -961,6 +1000,16 @@ enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t
         text_printf(&t, ",\n  \"spp\": %u", tm->spp);
     if (tm->ray_count)
         text_printf(&t, ",\n  \"rays\": %llu", (unsigned long long)tm->ray_count);
+    if (tm->hits) {
+        const double v[] = {tm->hits->mean, tm->hits->p5, tm->hits->p50, tm->hits->p95};
+        const char *const key[] = {"{\"mean\": ", ", \"p5\": ", ", \"p50\": ", ", \"p95\": "};
+        text_puts(&t, ",\n  \"hits\": ");
+        for (int i = 0; i < 4; i++) {
+            text_puts(&t, key[i]);
+            json_number(&t, v[i]);
+        }
+        text_puts(&t, "}");
+    }
     text_puts(&t, "\n}\n");
 
     enum rb_status st;

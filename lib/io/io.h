@@ -128,6 +128,21 @@ const char *rb_io_default_ocio_config(void);
 
 /* ---- timing sidecar ------------------------------------------------------------------- */
 
+/* A hit-ratio image summed up, as the timing sidecar's "hits" object records it. */
+struct rb_io_hits {
+    double mean;         /* the sum in double, in pixel order, over the count */
+    double p5, p50, p95; /* nearest rank: the k-th smallest value, k = ceil(p * count / 100) */
+};
+
+/* Sums up count values (a hit-ratio image, rows top to bottom): the mean and the nearest-rank
+ * percentiles of the finite ones (values that are not finite are left out, as raybundle report
+ * leaves them out). The percentile p of N values is the k-th smallest, k = ceil(p * N / 100)
+ * counted from 1 and computed in integers, on a sorted copy: each is one of the values, and
+ * equal values give equal bits. With no finite value all four are NaN (null in the sidecar).
+ * RB_E_NOMEM for the copy; *out only on success. */
+enum rb_status rb_io_hits_summarize(const float *values, size_t count, struct rb_io_hits *out,
+                                    struct rb_err *err);
+
 struct rb_io_timing {
     int frame;
     double time_s;
@@ -145,13 +160,15 @@ struct rb_io_timing {
     /* bdpt's ray-bundle node buffer, written when capacity > 0: the most nodes one bundle
      * asked for, the capacity, the fragments dropped (overflow: dropped > 0) */
     uint32_t bundle_nodes_max, bundle_nodes_capacity, bundle_nodes_dropped;
+    const struct rb_io_hits *hits; /* the hit-ratio image's summary; NULL: none written */
 };
 
 /* Writes NAME.####.timing.json atomically:
  * {"frame": 12, "time_s": 0.5, "passes": [{"name": "gbuffer", "gpu_ms": 1.25, "count": 1}, ...],
  * (cpu_ms too where it is > 0)
  *  "wall_ms": 40.1, "device": "...", "driver": "...", ..., "nonfinite": 0}, and for bdpt
- *  "bundle_nodes": {"max": 5120, "capacity": 1048576, "dropped": 0, "overflow": false}. */
+ *  "bundle_nodes": {"max": 5120, "capacity": 1048576, "dropped": 0, "overflow": false}, and
+ *  with hits "hits": {"mean": 0.97, "p5": 0.75, "p50": 1, "p95": 1}. */
 enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t,
                                   struct rb_err *err);
 
@@ -164,6 +181,8 @@ struct rb_io_timing_file {
     size_t pass_count;
     double wall_ms;
     char device[256], driver[256];
+    bool has_hits;          /* the sidecar has a "hits" object */
+    struct rb_io_hits hits; /* its numbers (NaN for null) when it has */
 };
 
 /* Reads a sidecar as rb_io_timing_write writes it into *out (released with

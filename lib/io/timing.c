@@ -1,8 +1,9 @@
 /* Timing files read back, and bench.json: the sidecars rb_io_timing_write writes and the record
  * raybundle bench leaves beside its runs (written by io.c and bench.c), parsed with Jansson.
- * Only the fields raybundle timing compare and report need are read; a missing or mistyped one
- * is an error that names its JSON path, a file that does not parse one that names its line and
- * column. Needs only core and Jansson, so the fuzz replays link it alone. */
+ * Only the fields raybundle timing compare and report need are read, and the hit-ratio summary
+ * where there is one; a missing or mistyped one is an error that names its JSON path, a file that
+ * does not parse one that names its line and column. Needs only core and Jansson, so the fuzz
+ * replays link it alone. */
 #include "io/io.h"
 
 #include <errno.h>
@@ -124,6 +125,28 @@ static enum rb_status read_pass(json_t *p, size_t i, struct rb_pass_time *out, c
     return RB_OK;
 }
 
+/* The "hits" object, where there is one: four numbers, null (no finite hit ratio) read as NaN. */
+static enum rb_status read_hits(json_t *root, struct rb_io_timing_file *out, const char *path,
+                                struct rb_err *err)
+{
+    json_t *h = json_object_get(root, "hits");
+    if (!h)
+        return RB_OK;
+    if (!json_is_object(h))
+        return rb_errf(err, RB_E_PARSE, "%s: 'hits' is not an object", path);
+    const char *const key[] = {"mean", "p5", "p50", "p95"};
+    double *const v[] = {&out->hits.mean, &out->hits.p5, &out->hits.p50, &out->hits.p95};
+    for (int i = 0; i < 4; i++) {
+        enum rb_status st;
+        if (json_is_null(json_object_get(h, key[i])))
+            *v[i] = NAN;
+        else if ((st = get_number(h, "hits", key[i], v[i], path, err)))
+            return st;
+    }
+    out->has_hits = true;
+    return RB_OK;
+}
+
 static enum rb_status timing_load(const char *path, const char *text, size_t size,
                                   struct rb_io_timing_file *out, struct rb_err *err)
 {
@@ -137,7 +160,8 @@ static enum rb_status timing_load(const char *path, const char *text, size_t siz
     if ((st = get_int(root, "", "frame", INT32_MIN, INT32_MAX, &frame, path, err)) ||
         (st = get_number(root, "", "wall_ms", &out->wall_ms, path, err)) ||
         (st = get_string(root, "", "device", out->device, sizeof(out->device), path, err)) ||
-        (st = get_string(root, "", "driver", out->driver, sizeof(out->driver), path, err)))
+        (st = get_string(root, "", "driver", out->driver, sizeof(out->driver), path, err)) ||
+        (st = read_hits(root, out, path, err)))
         goto out;
     out->frame = (int)frame;
     if (!(passes = get_array(root, "passes", path, err))) {

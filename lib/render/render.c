@@ -3,9 +3,9 @@
  * enum rb_layer (core.h); the metadata holds nothing that depends on the time of the
  * render, so equal pixels give equal bytes.
  * Writing is off the critical path: a rendered frame is copied into one of QUEUE_DEPTH pending
- * entries and written (layer split, EXR compression, preview, sidecar, atomic renames) by one
- * writer thread, in frame order, while the next frame renders. A write error is reported by the
- * next call that hands over a frame or flushes. */
+ * entries and written (layer split, EXR compression, hit ratios, preview, sidecar, atomic
+ * renames) by one writer thread, in frame order, while the next frame renders. A write error is
+ * reported by the next call that hands over a frame or flushes. */
 #include "render/render.h"
 
 #include <math.h>
@@ -48,8 +48,9 @@ struct rb_render {
     struct pending {
         bool is_full;
         char path[4096];
-        struct rb_frame_result f; /* pixels and passes point at the entry's own copies */
+        struct rb_frame_result f; /* pixels, hits, passes: the entry's own copies */
         float *pixels;
+        float *hits; /* width x height floats, from the first frame that has hit ratios */
         struct rb_pass_time *passes;
         uint32_t pass_cap;
         double wall_ms;
@@ -72,6 +73,13 @@ static bool on_reference_pass(void *user, uint32_t done, uint32_t total)
     return true;
 }
 
+/* A frame's floats a pixel: the GPU reads back the job's layers, the reference makes all. */
+static uint32_t frame_stride(const struct rb_job *job)
+{
+    return rb_layer_stride(job->integrator.name == RB_INTEGRATOR_REFERENCE ? RB_LAYERS_ALL
+                                                                           : job->layer_mask);
+}
+
 enum rb_status rb_render_create(const struct rb_render_desc *desc, struct rb_render **out,
                                 struct rb_err *err)
 {
@@ -87,11 +95,7 @@ enum rb_status rb_render_create(const struct rb_render_desc *desc, struct rb_ren
     r->is_timing_only = desc->is_timing_only;
     snprintf(r->hash, sizeof(r->hash), "%016llx", (unsigned long long)desc->setup->job_hash);
     enum rb_status st = RB_OK;
-    /* A frame's floats a pixel: the GPU reads back the job's layers, the reference makes all. */
-    size_t frame_floats =
-        (size_t)job->width_px * job->height_px *
-        rb_layer_stride(job->integrator.name == RB_INTEGRATOR_REFERENCE ? RB_LAYERS_ALL
-                                                                        : job->layer_mask);
+    size_t frame_floats = (size_t)job->width_px * job->height_px * frame_stride(job);
     r->scratch = malloc(frame_floats * sizeof(float));
     if (!r->scratch) {
         st = rb_errf(err, RB_E_NOMEM, "out of memory for a %ux%u frame", job->width_px,
@@ -169,6 +173,7 @@ void rb_render_destroy(struct rb_render *r)
     }
     for (int q = 0; q < QUEUE_DEPTH; q++) {
         free(r->queue[q].pixels);
+        free(r->queue[q].hits);
         free(r->queue[q].passes);
     }
     rb_reference_destroy(r->ref);
@@ -208,9 +213,13 @@ int rb_render_last_frame(const struct rb_job *job, const struct rb_scene *scene)
 
 enum rb_render_verdict rb_render_resume_verdict(const struct rb_render *r, const char *path)
 {
-    char timing[4096], recorded[32];
+    char timing[4096], hits[4096], recorded[32];
+    /* bdpt's frames have their hit ratios beside them, written before the timing sidecar. */
+    bool has_hits = r->job->integrator.name == RB_INTEGRATOR_BDPT;
     if (rb_io_sidecar_path(path, ".timing.json", timing, sizeof(timing), NULL) != RB_OK ||
-        !rb_io_image_is_complete(path) || access(timing, R_OK) != 0)
+        rb_io_sidecar_path(path, ".hits.exr", hits, sizeof(hits), NULL) != RB_OK ||
+        !rb_io_image_is_complete(path) || access(timing, R_OK) != 0 ||
+        (has_hits && !rb_io_image_is_complete(hits)))
         return RB_RENDER_NEW;
     if (!rb_io_image_attr(path, "raybundle:jobHash", recorded, sizeof(recorded)) ||
         strcmp(recorded, r->hash) != 0)
@@ -219,6 +228,25 @@ enum rb_render_verdict rb_render_resume_verdict(const struct rb_render *r, const
 }
 
 /* ---- writing -------------------------------------------------------------------------------- */
+
+/* The metadata every image of a frame carries (the frame's EXR and its hit ratios): what made
+ * it, for which job, which frame. Returns the count (at most FRAME_ATTRS). */
+#define FRAME_ATTRS 5
+static size_t frame_attrs(const struct rb_render *r, const struct rb_frame_result *f,
+                          struct rb_io_attr *out)
+{
+    out[0] = (struct rb_io_attr){
+        .name = "raybundle:version", .type = RB_IO_ATTR_STRING, .s = RB_VERSION};
+    out[1] = (struct rb_io_attr){.name = "raybundle:integrator",
+                                 .type = RB_IO_ATTR_STRING,
+                                 .s = rb_integrator_name(r->job->integrator.name)};
+    out[2] =
+        (struct rb_io_attr){.name = "raybundle:jobHash", .type = RB_IO_ATTR_STRING, .s = r->hash};
+    out[3] = (struct rb_io_attr){.name = "raybundle:frame", .type = RB_IO_ATTR_INT, .i = f->frame};
+    out[4] = (struct rb_io_attr){
+        .name = "raybundle:time", .type = RB_IO_ATTR_FLOAT, .f = (float)f->time_s};
+    return FRAME_ATTRS;
+}
 
 /* Splits the packed pixels into the EXR's layers (the beauty and the job's layers, in
  * RB_LAYER order) and writes it with its metadata. */
@@ -256,28 +284,42 @@ static enum rb_status write_exr(const struct rb_render *r, const char *path,
         out[l].pixels = p;
         p += n * count;
     }
-    struct rb_io_attr attrs[] = {
-        {.name = "raybundle:version", .type = RB_IO_ATTR_STRING, .s = RB_VERSION},
-        {.name = "raybundle:integrator",
-         .type = RB_IO_ATTR_STRING,
-         .s = rb_integrator_name(r->job->integrator.name)},
-        {.name = "raybundle:jobHash", .type = RB_IO_ATTR_STRING, .s = r->hash},
-        {.name = "raybundle:frame", .type = RB_IO_ATTR_INT, .i = f->frame},
-        {.name = "raybundle:time", .type = RB_IO_ATTR_FLOAT, .f = (float)f->time_s},
-        {.name = "raybundle:defaultLight",
-         .type = RB_IO_ATTR_STRING,
-         .s = r->setup->default_light_note},
-        {.name = "worldToCamera", .type = RB_IO_ATTR_M44},
-        {.name = "worldToNDC", .type = RB_IO_ATTR_M44},
-        {.name = "raybundle:spp", .type = RB_IO_ATTR_INT, .i = (int)f->spp},
-    };
-    size_t attr_count = sizeof(attrs) / sizeof(attrs[0]) - (f->spp ? 0 : 1);
+    struct rb_io_attr attrs[FRAME_ATTRS + 4];
+    size_t attr_count = frame_attrs(r, f, attrs);
+    attrs[attr_count++] = (struct rb_io_attr){.name = "raybundle:defaultLight",
+                                              .type = RB_IO_ATTR_STRING,
+                                              .s = r->setup->default_light_note};
     /* Our matrices are column-major for column vectors, which is exactly Imath's row-major
      * layout for row vectors: the floats go over unchanged. */
-    memcpy(attrs[6].m, f->world_to_camera.m, sizeof(attrs[6].m));
-    memcpy(attrs[7].m, f->world_to_ndc.m, sizeof(attrs[7].m));
+    attrs[attr_count] = (struct rb_io_attr){.name = "worldToCamera", .type = RB_IO_ATTR_M44};
+    memcpy(attrs[attr_count++].m, f->world_to_camera.m, sizeof(attrs[0].m));
+    attrs[attr_count] = (struct rb_io_attr){.name = "worldToNDC", .type = RB_IO_ATTR_M44};
+    memcpy(attrs[attr_count++].m, f->world_to_ndc.m, sizeof(attrs[0].m));
+    if (f->spp)
+        attrs[attr_count++] =
+            (struct rb_io_attr){.name = "raybundle:spp", .type = RB_IO_ATTR_INT, .i = (int)f->spp};
     return rb_io_exr_write(path, f->width_px, f->height_px, out, layer_count, attrs, attr_count,
                            err);
+}
+
+/* The hit ratios beside the frame (NAME.####.hits.exr): one float channel, Y, 1 where every
+ * temporal cache hit and 0 where none did, with the frame's metadata. */
+static enum rb_status write_hits(const struct rb_render *r, const char *exr_path,
+                                 const struct rb_frame_result *f, struct rb_err *err)
+{
+    char path[4096];
+    enum rb_status st = rb_io_sidecar_path(exr_path, ".hits.exr", path, sizeof(path), err);
+    if (st)
+        return st;
+    static const char *const y[] = {"Y"};
+    const struct rb_io_layer layer = {.channel_count = 1, .channel_names = y, .pixels = f->hits};
+    struct rb_io_attr attrs[FRAME_ATTRS + 1];
+    size_t attr_count = frame_attrs(r, f, attrs);
+    attrs[attr_count++] = (struct rb_io_attr){
+        .name = "ImageDescription",
+        .type = RB_IO_ATTR_STRING,
+        .s = "hit ratio: the temporal caches' sum of h / l (1: every cache hit, 0: none)"};
+    return rb_io_exr_write(path, f->width_px, f->height_px, &layer, 1, attrs, attr_count, err);
 }
 
 static enum rb_status write_preview(const struct rb_render *r, const char *exr_path,
@@ -305,8 +347,10 @@ static enum rb_status write_timing(const struct rb_render *r, const char *exr_pa
                                    struct rb_err *err)
 {
     char path[4096];
+    struct rb_io_hits hits;
     enum rb_status st = rb_io_sidecar_path(exr_path, ".timing.json", path, sizeof(path), err);
-    if (st)
+    if (st || (f->hits && (st = rb_io_hits_summarize(f->hits, (size_t)f->width_px * f->height_px,
+                                                     &hits, err))))
         return st;
     struct rb_io_timing t = {
         .frame = f->frame,
@@ -325,6 +369,7 @@ static enum rb_status write_timing(const struct rb_render *r, const char *exr_pa
         .bundle_nodes_max = f->bundle_nodes_max,
         .bundle_nodes_capacity = f->bundle_nodes_capacity,
         .bundle_nodes_dropped = f->bundle_nodes_dropped,
+        .hits = f->hits ? &hits : NULL,
     };
     return rb_io_timing_write(path, &t, err);
 }
@@ -348,6 +393,8 @@ static void *writer_main(void *arg)
         if (r->write_st == RB_OK) /* after a failure, nothing more is written */
             (void)((st = rb_io_make_parent_dirs(e->path, &err)) ||
                    (!r->is_timing_only && (st = write_exr(r, e->path, &e->f, &err))) ||
+                   (!r->is_timing_only && e->f.hits &&
+                    (st = write_hits(r, e->path, &e->f, &err))) ||
                    (!r->is_timing_only && r->job->color.preview &&
                     (st = write_preview(r, e->path, &e->f, &err))) ||
                    (st = write_timing(r, e->path, &e->f, e->wall_ms, &err)));
@@ -406,17 +453,24 @@ static enum rb_status hand_over(struct rb_render *r, const char *path,
         e->passes = p;
         e->pass_cap = f->pass_count;
     }
+    size_t n = (size_t)f->width_px * f->height_px;
+    if (f->hits && !e->hits && !(e->hits = malloc(n * sizeof(*e->hits)))) {
+        st = rb_errf(err, RB_E_NOMEM, "frame %d: out of memory for its hit ratios", f->frame);
+        goto out;
+    }
     if (rb_strlcpy(e->path, path, sizeof(e->path)) >= sizeof(e->path)) {
         st = rb_errf(err, RB_E_INVALID, "frame %d: path too long: '%s'", f->frame, path);
         goto out;
     }
     /* Only the layers the job writes are in a GPU frame's readback (floats_per_pixel). */
-    memcpy(e->pixels, f->pixels,
-           (size_t)f->width_px * f->height_px * f->floats_per_pixel * sizeof(float));
+    memcpy(e->pixels, f->pixels, n * f->floats_per_pixel * sizeof(float));
+    if (f->hits) /* the integrator's buffer is reused by the next frame */
+        memcpy(e->hits, f->hits, n * sizeof(*e->hits));
     if (f->pass_count)
         memcpy(e->passes, f->passes, f->pass_count * sizeof(*e->passes));
     e->f = *f;
     e->f.pixels = e->pixels;
+    e->f.hits = f->hits ? e->hits : NULL;
     e->f.passes = e->passes;
     e->wall_ms = wall_ms;
     e->is_full = true;
@@ -455,6 +509,20 @@ enum rb_status rb_render_frame(struct rb_render *r, int frame, const char *path,
     return hand_over(r, path, &f, info->wall_ms, err);
 }
 
+enum rb_status rb_render_write(struct rb_render *r, const char *path,
+                               const struct rb_frame_result *f, double wall_ms, struct rb_err *err)
+{
+    const struct rb_job *job = r->job;
+    if (!f->pixels || f->width_px != job->width_px || f->height_px != job->height_px ||
+        f->floats_per_pixel > frame_stride(job))
+        return rb_errf(err, RB_E_INVALID,
+                       "frame %d: a %ux%u frame of %u floats a pixel does not fit the job's %ux%u "
+                       "of at most %u",
+                       f->frame, f->width_px, f->height_px, f->floats_per_pixel, job->width_px,
+                       job->height_px, frame_stride(job));
+    return hand_over(r, path, f, wall_ms, err);
+}
+
 /* ---- space, environment -----------------------------------------------------------------------
  */
 
@@ -473,6 +541,8 @@ enum rb_status rb_render_check_space(const char *path, bool has_preview, int fra
         frame += file_size(side);
     if (has_preview && rb_io_sidecar_path(path, ".png", side, sizeof(side), NULL) == RB_OK)
         frame += file_size(side);
+    if (rb_io_sidecar_path(path, ".hits.exr", side, sizeof(side), NULL) == RB_OK)
+        frame += file_size(side); /* 0 when the integrator writes none */
     uint64_t need = frame * (uint64_t)frames_left, have = rb_io_free_bytes(path);
     if (have == UINT64_MAX || need + need / 20 <= have)
         return RB_OK;

@@ -1,8 +1,8 @@
 /* A run of a job, as `raybundle render` and `raybundle reference` make it: the renderer behind it
  * (the GPU frame driver or the CPU reference, one result type for both), the decision --resume
  * makes for a frame, and the writing of a frame's files (the EXR with its layers and metadata,
- * the timing sidecar, the preview), each to a temporary name and renamed. The command parses
- * options, reports progress and chooses exit codes; this module does the work. */
+ * the hit ratios, the timing sidecar, the preview), each to a temporary name and renamed. The
+ * command parses options, reports progress and chooses exit codes; this module does the work. */
 #ifndef RB_RENDER_RENDER_H
 #define RB_RENDER_RENDER_H
 
@@ -53,7 +53,8 @@ enum rb_render_verdict {
     RB_RENDER_KEEP,    /* complete, with its sidecar, rendered by this very job: keep it */
     RB_RENDER_STALE,   /* complete, but another job's (setting, scene contents, environment) */
 };
-/* Decides for the frame at path (the EXR; its timing sidecar beside it). */
+/* Decides for the frame at path (the EXR; its timing sidecar beside it, and for bdpt its hit
+ * ratios: a frame without a complete NAME.####.hits.exr is rendered again). */
 enum rb_render_verdict rb_render_resume_verdict(const struct rb_render *r, const char *path);
 
 /* What rendering a frame did. */
@@ -64,20 +65,30 @@ struct rb_render_frame_info {
     double wall_ms; /* rendering it and handing it to the writer (the sidecar's wall_ms) */
 };
 
-/* Renders frame f and hands it to the writer thread, which writes path (EXR), its timing
- * sidecar and, when the job asks for previews, its PNG, in frame order, while the caller renders
+/* Renders frame f and hands it to the writer thread, which writes path (EXR), its hit ratios
+ * (NAME.####.hits.exr) when the renderer made them, its timing sidecar and, when the job asks
+ * for previews, its PNG, in frame order, while the caller renders
  * the next frame (at most two frames wait). A partial frame is not written. Fails with the
  * renderer's status, or with an earlier frame's write failure ("frame N: ..."); a file is
  * either complete or absent. */
 enum rb_status rb_render_frame(struct rb_render *r, int frame, const char *path,
                                struct rb_render_frame_info *info, struct rb_err *err);
 
+/* Hands a frame result made elsewhere to the writer thread, as rb_render_frame hands over the
+ * frames it renders: its files at path (the EXR, the hit ratios when f->hits is set, the preview
+ * and the timing sidecar), f and what it points at copied. f must be the job's size, with at
+ * most the floats a pixel of the renderer's frames (RB_E_INVALID otherwise); fails as
+ * rb_render_frame does on an earlier write failure. */
+enum rb_status rb_render_write(struct rb_render *r, const char *path,
+                               const struct rb_frame_result *f, double wall_ms, struct rb_err *err);
+
 /* Waits until every frame handed over is written; the first write failure, if any. Callers
  * flush before they rely on the files (a space check, the closing line); destroy flushes too. */
 enum rb_status rb_render_flush(struct rb_render *r, struct rb_err *err);
 
 /* After the first frame written at path: RB_E_IO when frames_left more frames of that size
- * (EXR, sidecar, preview) would not fit on the output's file system, with 5% to spare. */
+ * (EXR, sidecar, preview, hit ratios) would not fit on the output's file system, with 5% to
+ * spare. */
 enum rb_status rb_render_check_space(const char *path, bool has_preview, int frames_left,
                                      struct rb_err *err);
 
