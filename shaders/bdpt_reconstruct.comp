@@ -2,7 +2,9 @@
 // temporal cache that holds its surface. For each cache (in slot order, so that a static shot
 // sums the same numbers in the same order every frame), the pixel's surface as it was in the
 // frame that wrote the cache (the reproject pass) picks the cache's texel whose sample, offset
-// by the cache's subpixel offset, lies nearest, and the depths give the hit weight h: equation
+// by the cache's subpixel offset, lies nearest (at an edge, where that sample saw another
+// surface, h < 1/2, the best of the four samples around), and the depths give the hit weight h:
+// equation
 // (3), exp(-log^2(z / z_c) / (2 sigma^2)), or equation (2), |z - z_c| < epsilon. The light is
 // the h-weighted mean (equation 1); one cache alone gives its own light, unweighted; where no
 // cache hits, this frame's cache alone. Sum h / l is the hit ratio, 1 where there is no surface
@@ -39,6 +41,22 @@ float weight(float z, float zc)
     return exp(-(l * l) / h.params.x);
 }
 
+// The hit weight of cache texel t (slot j) for a surface that lands at w.xy at depth w.z: 0
+// outside the image or where the cache saw no surface.
+float sample_weight(ivec3 t, uint j, vec4 w, ivec2 size)
+{
+    if (any(lessThan(t.xy, ivec2(0))) || any(greaterThanEqual(t.xy, size)))
+        return 0.0;
+    float zc = imageLoad(c0, t).w;
+    if (!(zc > 0.0))
+        return 0.0;
+    // z_c where the surface lands: the sample's 1 / z moved along its slope
+    vec2 slope = vec2(imageLoad(c1, t).w, imageLoad(c3, t).w);
+    vec2 from = vec2(t.xy) + 0.5 + h.offset[j].xy;
+    float inv_zc = 1.0 / zc + dot(slope, w.xy - from);
+    return inv_zc > 0.0 ? weight(w.z, 1.0 / inv_zc) : 0.0;
+}
+
 void main()
 {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -58,21 +76,24 @@ void main()
         vec4 w = imageLoad(where, ivec3(px, int(a)));
         if (w.w <= 0.0)
             continue;
-        ivec3 t = ivec3(floor(w.xy - h.offset[j].xy), int(j));
-        if (any(lessThan(t.xy, ivec2(0))) || any(greaterThanEqual(t.xy, size)))
-            continue;
-        vec4 d0 = imageLoad(c0, t);
-        if (!(d0.w > 0.0))
-            continue;
-        vec4 d1 = imageLoad(c1, t), d3 = imageLoad(c3, t);
-        // z_c where the surface lands: the sample's 1 / z moved along its slope
-        vec2 from = vec2(t.xy) + 0.5 + h.offset[j].xy;
-        float inv_zc = 1.0 / d0.w + dot(vec2(d1.w, d3.w), w.xy - from);
-        if (!(inv_zc > 0.0))
-            continue;
-        float hj = weight(w.z, 1.0 / inv_zc);
+        // The sample nearest the surface's position; at an edge, where that one saw another
+        // surface (h below 1/2), the best of the four around it.
+        vec2 at = w.xy - h.offset[j].xy; // in the cache's texels, samples at + 0.5
+        ivec2 nearest = ivec2(floor(at)), corner = ivec2(floor(at - 0.5));
+        ivec3 t = ivec3(nearest, int(j));
+        float hj = sample_weight(t, j, w, size);
+        bool edge = hj < 0.5;
+        for (int k = 0; k < 4 && edge; k++) {
+            ivec3 c = ivec3(corner + ivec2(k & 1, k >> 1), int(j));
+            float hc = c.xy == nearest ? 0.0 : sample_weight(c, j, w, size);
+            if (hc > hj) {
+                hj = hc;
+                t = c;
+            }
+        }
         if (!(hj > 0.0))
             continue;
+        vec4 d0 = imageLoad(c0, t), d1 = imageLoad(c1, t), d3 = imageLoad(c3, t);
         s0 += hj * d0.rgb;
         s1 += hj * d1.rgb;
         s2 += hj * imageLoad(c2, t).rgb;

@@ -1,10 +1,10 @@
 /* hitband HITS FRAME RADIUS: the hit ratio around what moves and away from it. FRAME's motion
  * layer marks the pixels that move (|motion| above a hundredth of a pixel, with a static camera
- * the pixels of moving objects); the band is every pixel within RADIUS pixels of one (the object
- * and the ring around it that it uncovers and covers), "away" every pixel farther than
- * 2 RADIUS. Prints "band MEAN N away MEAN N" (the mean of the HITS image's first channel and the
- * pixel count); exit 1 when a file cannot be read, the sizes differ, FRAME has no motion layer
- * or either set is empty, 2 on bad usage. */
+ * the pixels of moving objects, which reprojection follows); the band is every pixel that does
+ * not move within RADIUS pixels of one (the ring around a moving object, which it uncovers and
+ * covers), "away" every pixel farther than 2 RADIUS. Prints "band MEAN N away MEAN N" (the mean of
+ * the HITS image's first channel and the pixel count); exit 1 when a file cannot be read, the sizes
+ * differ, FRAME has no motion layer or either set is empty, 2 on bad usage. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -50,7 +50,7 @@ int main(int argc, char **argv)
                         nearest = d < nearest ? d : nearest;
                     }
                 }
-            int set = nearest <= r ? 0 : nearest > 2 * r ? 1 : -1;
+            int set = nearest > 2 * r ? 1 : nearest <= r && !moving[y * w + x] ? 0 : -1;
             if (set >= 0) {
                 sum[set] += hits.pixels[(y * w + x) * hits.channel_count];
                 count[set]++;
