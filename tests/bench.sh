@@ -3,7 +3,8 @@
 # median GPU milliseconds, frames per second and peak resident memory; the timing compare of
 # the build against itself; the same frames as a Slurm array against one process; then the CPU
 # reference's speed, and its error on the Cornell box at 64 to 1024 spp; last, the bdpt
-# integrator's figures (tests/bench-bdpt.sh, which says what they are).
+# integrator's figures (tests/bench-bdpt.sh, which says what they are) and its temporal caches'
+# (tests/bench-temporal.sh).
 set -eu
 BUILD=${BUILD:-build}
 . tests/bench-lib.sh
@@ -100,3 +101,4 @@ else
 fi
 
 BUILD=$BUILD sh tests/bench-bdpt.sh
+BUILD=$BUILD sh tests/bench-temporal.sh
