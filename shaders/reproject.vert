@@ -46,8 +46,8 @@ void main()
     // As gbuffer.vert computes it (the frame's own G-buffer: no offset).
     vec4 clip = g.view_proj * vec4(v0[gl_VertexIndex].position.xyz, 1.0);
     gl_Position = clip;
-    for (uint a = 0u; a < RB_BDPT_MAX_CACHES; a++) {
-        vec4 x = vec4(then_position(min(a, h.info.x - 1u)), 1.0);
+    for (uint a = 0u; a < h.info.x; a++) { // the ages past l are never read
+        vec4 x = vec4(then_position(a), 1.0);
         vec4 c = h.view_proj[a] * x;
         o_then[a] = vec4(c.xy, c.w, dot(h.depth_row[a], x));
     }

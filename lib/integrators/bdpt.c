@@ -72,13 +72,7 @@ static uint32_t wrap(int64_t x, uint32_t n)
  * (1/2, 1/2), phi2 the base-2 radical inverse; the centre when l is 1. */
 static void cache_offset(uint32_t l, uint32_t i, float out[2])
 {
-    uint32_t r = i;
-    r = (r << 16) | (r >> 16);
-    r = ((r & 0x00ff00ffu) << 8) | ((r & 0xff00ff00u) >> 8);
-    r = ((r & 0x0f0f0f0fu) << 4) | ((r & 0xf0f0f0f0u) >> 4);
-    r = ((r & 0x33333333u) << 2) | ((r & 0xccccccccu) >> 2);
-    r = ((r & 0x55555555u) << 1) | ((r & 0xaaaaaaaau) >> 1);
-    double y = (double)r / 4294967296.0 + 0.5 / l;
+    double y = (double)rb_qmc_sobol(i, 0) / 4294967296.0 + 0.5 / l; /* phi2(i) + 1/(2l) */
     out[0] = (float)((i + 0.5) / l - 0.5);
     out[1] = (float)(y - floor(y) - 0.5);
 }

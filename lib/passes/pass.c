@@ -131,3 +131,15 @@ void rb_pass_record_bindings(VkCommandBuffer cmd, const struct rb_pass_bindings 
     vkCmdBindPipeline(cmd, p->point, p->pipeline);
     rb_gpu_push_bindings(p->gpu, cmd, p->point, p->layout.pipeline_layout, &b->set);
 }
+
+void rb_pass_draw_frame(VkCommandBuffer cmd, const struct rb_frame *frame)
+{
+    VkViewport vp = {0, 0, (float)frame->width_px, (float)frame->height_px, 0.0f, 1.0f};
+    VkRect2D sc = {{0, 0}, {frame->width_px, frame->height_px}};
+    vkCmdSetViewport(cmd, 0, 1, &vp);
+    vkCmdSetScissor(cmd, 0, 1, &sc);
+    if (frame->index_count) {
+        vkCmdBindIndexBuffer(cmd, frame->indices.buffer, 0, VK_INDEX_TYPE_UINT32);
+        vkCmdDrawIndexed(cmd, frame->index_count, 1, 0, 0, 0);
+    }
+}

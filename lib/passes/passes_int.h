@@ -65,6 +65,11 @@ struct rb_pass_raster_desc {
 enum rb_status rb_pass_raster_init(struct rb_gpu *gpu, const struct rb_pass_raster_desc *desc,
                                    struct rb_pass *out, struct rb_err *err);
 
+/* Inside a rendering begun over the whole frame, after the pass's bindings: the frame's
+ * viewport and scissor, and one indexed draw of all its instances' world vertices (the
+ * G-buffer pass's, and every pass that draws the same surfaces again). */
+void rb_pass_draw_frame(VkCommandBuffer cmd, const struct rb_frame *frame);
+
 /* Destroys the pipeline and layout; a zeroed pass is fine. */
 void rb_pass_release(struct rb_pass *pass);
 

@@ -102,14 +102,7 @@ void rb_pass_reproject_record(struct rb_pass_reproject *p, VkCommandBuffer cmd,
 
     vkCmdBeginRendering(cmd, &ri);
     rb_pass_record_bindings(cmd, &b);
-    VkViewport vp = {0, 0, (float)frame->width_px, (float)frame->height_px, 0.0f, 1.0f};
-    VkRect2D sc = {{0, 0}, {frame->width_px, frame->height_px}};
-    vkCmdSetViewport(cmd, 0, 1, &vp);
-    vkCmdSetScissor(cmd, 0, 1, &sc);
-    if (frame->index_count) {
-        vkCmdBindIndexBuffer(cmd, frame->indices.buffer, 0, VK_INDEX_TYPE_UINT32);
-        vkCmdDrawIndexed(cmd, frame->index_count, 1, 0, 0, 0);
-    }
+    rb_pass_draw_frame(cmd, frame);
     vkCmdEndRendering(cmd);
 }
 
