@@ -15,11 +15,11 @@ done
 allowed() { # module -> modules it may include
     case $1 in
     core) echo "core" ;;
-    job | gpu | io) echo "core $1" ;;
+    job | gpu | io | bvh) echo "core $1" ;;
     reference) echo "core job scene reference" ;;
     scene) echo "core job scene" ;;
-    passes) echo "core gpu scene job passes" ;;
-    integrators) echo "core gpu scene job passes integrators" ;;
+    passes) echo "core gpu scene job bvh passes" ;;
+    integrators) echo "core gpu scene job bvh passes integrators" ;;
     analysis) echo "core io analysis" ;;
     render) echo "core gpu scene job integrators reference io render" ;;
     *) echo "" ;;

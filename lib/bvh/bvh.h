@@ -1,0 +1,70 @@
+/* The BVH of the hybrid integrator (seed 003): rays that fail in screen space are traced on the
+ * GPU through a BVH over the world-space triangles (shaders/common/bvh.glsl), since lavapipe has
+ * no ray queries. Built on the CPU by Embree's rtcBuildBVH, then flattened into the layout of
+ * shaders/common/bvh_shared.h in a canonical order, so that the bytes do not depend on Embree's
+ * threads. Not for the reference, which traces Embree's own scene. */
+#ifndef RB_BVH_BVH_H
+#define RB_BVH_BVH_H
+
+#include "core/core.h"
+
+#include "bvh_shared.h" /* shaders/common, on the include path */
+
+_Static_assert(sizeof(struct rb_gpu_bvh_node) == 64, "rb_gpu_bvh_node is std430");
+_Static_assert(sizeof(struct rb_gpu_bvh_triangle) == 48, "rb_gpu_bvh_triangle is std430");
+_Static_assert(sizeof(struct rb_gpu_bvh_ray) == 32, "rb_gpu_bvh_ray is std430");
+_Static_assert(sizeof(struct rb_gpu_bvh_trace_hit) == 32, "rb_gpu_bvh_trace_hit is std430");
+_Static_assert(RB_BVH_STACK_SIZE > RB_BVH_MAX_DEPTH + 8, "the stack outgrows Embree's depth");
+
+/* A world-space triangle soup as the renderer lays it out (lib/integrators/frame.c). */
+struct rb_bvh_mesh {
+    const float *positions;  /* xyz of vertex i at positions[i * stride_floats] */
+    size_t stride_floats;    /* at least 3 */
+    uint32_t vertex_count;   /* every index is below it */
+    const uint32_t *indices; /* global triangle t is indices[3t], [3t + 1], [3t + 2] */
+    uint32_t triangle_count;
+};
+
+/* One instance's triangles, contiguous in the global list. Objects should not overlap. */
+struct rb_bvh_object {
+    uint32_t first_triangle, triangle_count;
+};
+
+struct rb_bvh_desc {
+    const struct rb_bvh_mesh *mesh;
+    const struct rb_bvh_object *objects; /* NULL with object_count 0: the whole mesh, one object */
+    uint32_t object_count;
+    uint64_t triangle_budget; /* the most triangles the BVH holds; 0: every object */
+    uint32_t thread_count;    /* Embree's build threads; 0: one per core. The output is the same
+                               * whatever the count. */
+};
+
+/* What rb_bvh_build makes: the two arrays of bvh_shared.h, ready to upload. */
+struct rb_bvh {
+    struct rb_gpu_bvh_node *nodes; /* node_count >= 1; node 0 is the root */
+    uint32_t node_count;
+    struct rb_gpu_bvh_triangle *triangles;
+    uint32_t triangle_count;
+    uint32_t object_count, objects_included;
+    uint64_t triangles_left_out;   /* of the objects left out by the budget (degenerate ones not
+                                    * counted) */
+    uint64_t triangles_degenerate; /* zero area or not finite: never in the BVH */
+    uint32_t depth;                /* of the deepest leaf, the root's children at 1 */
+    float bounds_min[3], bounds_max[3]; /* of the triangles included; min > max when none */
+};
+
+/* Builds the BVH of the objects of desc->mesh. Objects are chosen under desc->triangle_budget
+ * by score, the object's world surface area (what it can occlude) over its triangle count (the
+ * cost of tracing it), the higher first, ties to the lower index; an object that no longer fits
+ * is skipped and later ones still tried. Degenerate triangles (zero area, a coordinate not
+ * finite) are left out and not counted against the budget. No triangles gives a valid BVH that
+ * nothing hits. The result depends only on the input, not on Embree's threads or scheduling.
+ * *out (released with rb_bvh_release) is written only on success. Fails with RB_E_INVALID for
+ * an object or index out of range, RB_E_NOMEM, or RB_E_EXTERNAL when Embree fails (its error
+ * named). Thread-safe: each call has its own Embree device. */
+enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, struct rb_err *err);
+
+/* Frees what rb_bvh_build allocated and zeroes *bvh; accepts a zeroed struct. */
+void rb_bvh_release(struct rb_bvh *bvh);
+
+#endif
