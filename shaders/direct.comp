@@ -24,6 +24,7 @@ layout(binding = RB_BIND_DIRECT_ENV_MAP) uniform sampler2D env_map;
 layout(binding = RB_BIND_DIRECT_OUT, rgba32f) uniform writeonly image2D o_direct;
 
 #include "shadow.glsl"
+#include "punctual.glsl"
 
 void main()
 {
@@ -50,38 +51,6 @@ void main()
     vec3 ng = rb_oct_decode(imageLoad(gb_motion, px).zw);
     vec3 v = normalize(g.camera_pos.xyz - p);
 
-    vec3 radiance = emission.rgb;
-    for (uint i = 0; i < g.size.z; i++) {
-        rb_gpu_light L = lights[i];
-        uint kind = uint(L.position.w);
-        vec3 l;
-        float dist, atten;
-        if (kind == RB_KIND_DIRECTIONAL) {
-            l = -L.direction.xyz;
-            dist = 0.0;
-            atten = 1.0;
-        } else {
-            vec3 d = L.position.xyz - p;
-            dist = length(d);
-            l = d / max(dist, 1e-8);
-            atten = rb_light_falloff(dist, L.direction.w);
-            if (kind == RB_KIND_SPOT)
-                atten *= rb_spot_factor(L.direction.xyz, -l, L.cone.xy);
-        }
-        float ndl = dot(n, l);
-        if (ndl <= 0.0 || atten <= 0.0 || dot(ng, l) <= 0.0)
-            continue;
-        float vis = 1.0;
-        int first = int(L.color.w);
-        if (first >= 0) {
-            float cos_g = max(dot(ng, l), 0.0);
-            uint layer = uint(first) + (kind == RB_KIND_POINT ? rb_cube_face(-l) : 0u);
-            vis = shadow_visibility(layer, p, ng, cos_g);
-        }
-        if (vis <= 0.0)
-            continue;
-        vec3 f = rb_brdf(n, v, l, c_diff, spec.rgb, emission.w, spec.a);
-        radiance += f * L.color.rgb * atten * ndl * vis;
-    }
+    vec3 radiance = rb_punctual_light(emission.rgb, p, n, ng, v, c_diff, spec.rgb, emission.w, spec.a);
     imageStore(o_direct, px, vec4(radiance, 1.0));
 }

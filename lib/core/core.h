@@ -232,6 +232,14 @@ const char *rb_layer_name(enum rb_layer layer);               /* "direct", ... *
 /* What one frame produced, whichever renderer made it (a GPU integrator or the CPU reference);
  * the library writes it out (EXR layers, sidecars). Pointers are owned by the renderer and valid
  * until its next render or destroy. */
+/* The hybrid integrator's rays of a frame: those its pixels requested, then where they ended:
+ * hit in screen space, queued for the BVH (which hit, missed, or were dropped because the queue
+ * was full), so requested = screen_hits + queued + those sampled below the surface, and queued =
+ * bvh_hits + misses + dropped. */
+struct rb_ray_counts {
+    uint64_t requested, screen_hits, queued, bvh_hits, misses, dropped;
+};
+
 struct rb_frame_result {
     int frame;
     double time_s;
@@ -251,6 +259,7 @@ struct rb_frame_result {
     uint32_t bundle_nodes_max, bundle_nodes_capacity, bundle_nodes_dropped;
     const float *hits; /* width_px x height_px floats, rows top to bottom: the temporal
                         * caches' hit ratio, sum of h / l (bdpt); NULL: none */
+    const struct rb_ray_counts *ray_counts; /* the hybrid integrator's; NULL: none */
 };
 
 #endif

@@ -19,6 +19,7 @@ static const struct rb_integrator_ops *ops_for(enum rb_integrator_kind kind)
     case RB_INTEGRATOR_DEFAULT:
     case RB_INTEGRATOR_DIRECT: return &rb_integrator_direct;
     case RB_INTEGRATOR_BDPT: return &rb_integrator_bdpt;
+    case RB_INTEGRATOR_HYBRID: return &rb_integrator_hybrid;
     default: return NULL;
     }
 }
@@ -167,7 +168,8 @@ static enum rb_status render_one(struct rb_integrator *it, int frame_index, bool
     rb_frame_write_slot(frame, it->scene, &it->cur, ctx.cur);
     rb_frame_write_globals(frame, it->job, frame_index, &it->cur, &it->prev, it->has_env_map);
     it->has_last = false; /* until this frame completes */
-    if ((st = rb_gpu_begin(gpu, err)))
+    if ((it->ops->prepare && (st = it->ops->prepare(it, it->state, &ctx, err))) ||
+        (st = rb_gpu_begin(gpu, err)))
         return st;
     it->ops->record(it, it->state, gpu->cmd, &ctx);
     if (!is_warmup) /* the caller reads the pixels once the fence has signalled */

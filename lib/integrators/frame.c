@@ -235,6 +235,27 @@ static enum rb_status upload_materials(struct rb_gpu *gpu, const struct rb_scene
     return st;
 }
 
+uint32_t *rb_frame_world_indices(const struct rb_scene *scene, const struct rb_scene_pose *pose,
+                                 uint64_t *count)
+{
+    uint64_t icount = 0;
+    for (uint32_t i = 0; i < pose->instance_count; i++)
+        icount += scene->primitives[pose->instances[i].primitive].index_count;
+    *count = icount;
+    uint32_t *indices = malloc((icount ? icount : 1) * sizeof(uint32_t));
+    if (!indices)
+        return NULL;
+    uint32_t dst = 0;
+    uint64_t k = 0;
+    for (uint32_t i = 0; i < pose->instance_count; i++) {
+        const struct rb_scene_primitive *p = &scene->primitives[pose->instances[i].primitive];
+        for (uint32_t j = 0; j < p->index_count; j++)
+            indices[k++] = dst + scene->indices[p->first_index + j];
+        dst += p->vertex_count;
+    }
+    return indices;
+}
+
 /* The world vertex buffer holds each instance's vertices in instance order; the index buffer
  * points into it, so one indexed draw covers the scene. */
 static enum rb_status upload_geometry(struct rb_gpu *gpu, const struct rb_scene *scene,
@@ -250,22 +271,16 @@ static enum rb_status upload_geometry(struct rb_gpu *gpu, const struct rb_scene 
     if (vcount > UINT32_MAX / 2 || icount > UINT32_MAX / 4)
         return rb_errf(err, RB_E_UNSUPPORTED, "scene too large: %llu vertices, %llu indices",
                        (unsigned long long)vcount, (unsigned long long)icount);
-    uint32_t *indices = malloc((icount ? icount : 1) * sizeof(uint32_t));
+    uint32_t *indices = rb_frame_world_indices(scene, pose, &icount);
     if (!indices)
         return rb_errf(err, RB_E_NOMEM, "out of memory for %llu indices",
                        (unsigned long long)icount);
-    uint32_t dst = 0, k = 0;
-    for (uint32_t i = 0; i < pose->instance_count; i++) {
-        const struct rb_scene_primitive *p = &scene->primitives[pose->instances[i].primitive];
-        for (uint32_t j = 0; j < p->index_count; j++)
-            indices[k++] = dst + scene->indices[p->first_index + j];
-        dst += p->vertex_count;
-    }
     frame->vertex_count = (uint32_t)vcount;
     frame->index_count = (uint32_t)icount;
     frame->instance_count = pose->instance_count;
     enum rb_status st =
-        upload_buffer(gpu, indices, icount * sizeof(uint32_t), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+        upload_buffer(gpu, indices, icount * sizeof(uint32_t),
+                      VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                       "indices", &frame->indices, err);
     free(indices);
     if (st == RB_OK)

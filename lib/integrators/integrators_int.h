@@ -33,6 +33,9 @@ struct rb_integrator_ops {
     uint32_t (*history_frames)(const struct rb_job *job);
     /* Creates the integrator's own passes and resources once the driver's frame exists. */
     enum rb_status (*create)(struct rb_integrator *it, void **state, struct rb_err *err);
+    /* Optional: the frame's CPU work before it is recorded (hybrid: its BVH), which may fail. */
+    enum rb_status (*prepare)(struct rb_integrator *it, void *state, const struct rb_frame_ctx *ctx,
+                              struct rb_err *err);
     /* Records the frame: each pass between rb_integrator_pass_begin, which declares every
      * resource the pass reads and writes, and rb_integrator_pass_end. Cannot fail. */
     void (*record)(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
@@ -44,6 +47,7 @@ struct rb_integrator_ops {
 
 extern const struct rb_integrator_ops rb_integrator_direct;
 extern const struct rb_integrator_ops rb_integrator_bdpt;
+extern const struct rb_integrator_ops rb_integrator_hybrid;
 
 /* rb_integrator_create with the given ops instead of the job's integrator's (tests drive the
  * driver with integrators of their own). */
@@ -105,6 +109,12 @@ void rb_frame_write_slot(struct rb_frame *frame, const struct rb_scene *scene,
 void rb_frame_write_globals(struct rb_frame *frame, const struct rb_job *job, int frame_index,
                             const struct rb_moment *cur, const struct rb_moment *prev,
                             bool has_env_map);
+
+/* The scene's triangles as the frame's index buffer lists them (every instance of pose, in
+ * instance order, into the world vertex buffer): malloc'd, *count indices; NULL when out of
+ * memory. */
+uint32_t *rb_frame_world_indices(const struct rb_scene *scene, const struct rb_scene_pose *pose,
+                                 uint64_t *count);
 
 /* The camera's projection for the frame's aspect ratio. */
 struct rb_mat4 rb_frame_projection(const struct rb_frame *frame, const struct rb_camera *cam);

@@ -1000,6 +1000,15 @@ enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t
         text_printf(&t, ",\n  \"spp\": %u", tm->spp);
     if (tm->ray_count)
         text_printf(&t, ",\n  \"rays\": %llu", (unsigned long long)tm->ray_count);
+    if (tm->ray_counts) {
+        const struct rb_ray_counts *c = tm->ray_counts;
+        text_printf(&t,
+                    ",\n  \"ray_counts\": {\"requested\": %llu, \"screen_hits\": %llu, "
+                    "\"queued\": %llu, \"bvh_hits\": %llu, \"misses\": %llu, \"dropped\": %llu}",
+                    (unsigned long long)c->requested, (unsigned long long)c->screen_hits,
+                    (unsigned long long)c->queued, (unsigned long long)c->bvh_hits,
+                    (unsigned long long)c->misses, (unsigned long long)c->dropped);
+    }
     if (tm->hits) {
         const double v[] = {tm->hits->mean, tm->hits->p5, tm->hits->p50, tm->hits->p95};
         const char *const key[] = {"{\"mean\": ", ", \"p5\": ", ", \"p50\": ", ", \"p95\": "};

@@ -161,6 +161,7 @@ struct rb_io_timing {
      * asked for, the capacity, the fragments dropped (overflow: dropped > 0) */
     uint32_t bundle_nodes_max, bundle_nodes_capacity, bundle_nodes_dropped;
     const struct rb_io_hits *hits; /* the hit-ratio image's summary; NULL: none written */
+    const struct rb_ray_counts *ray_counts; /* the hybrid integrator's rays; NULL: none */
 };
 
 /* Writes NAME.####.timing.json atomically:
@@ -168,7 +169,9 @@ struct rb_io_timing {
  * (cpu_ms too where it is > 0)
  *  "wall_ms": 40.1, "device": "...", "driver": "...", ..., "nonfinite": 0}, and for bdpt
  *  "bundle_nodes": {"max": 5120, "capacity": 1048576, "dropped": 0, "overflow": false}, and
- *  with hits "hits": {"mean": 0.97, "p5": 0.75, "p50": 1, "p95": 1}. */
+ *  with hits "hits": {"mean": 0.97, "p5": 0.75, "p50": 1, "p95": 1}, and with ray counts
+ *  "ray_counts": {"requested": 1000, "screen_hits": 700, "queued": 290, "bvh_hits": 250,
+ *  "misses": 40, "dropped": 0}. */
 enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t,
                                   struct rb_err *err);
 

@@ -231,6 +231,31 @@ static const struct key keys[] = {
     K("integrator.bdpt.samples", KT_ENUM, JOB(integrator.bdpt.samples), NOLO, NOHI, "periodic", 0,
       "bdpt: periodic (cache i always the same points) or fresh (new points every frame)",
       ENUM(samples_names)),
+    K("integrator.hybrid.rays", KT_UINT, JOB(integrator.hybrid.rays), 1, 16, "1", 0,
+      "hybrid: rays each lobe (diffuse, specular) of a pixel may request a frame"),
+    K("integrator.hybrid.spp", KT_UINT, JOB(integrator.hybrid.spp), 1, 65536, "64", 0,
+      "hybrid: samples a lobe of a pixel aims for, scaled down by its material and direct light"),
+    K("integrator.hybrid.history", KT_UINT, JOB(integrator.hybrid.history), 2, 1024, "32", 0,
+      "hybrid: frames one accumulator spans before it starts again (two, staggered by half)"),
+    K("integrator.hybrid.noise", KT_FLOAT, JOB(integrator.hybrid.noise), 0, NOHI, "0.02", 0,
+      "hybrid: relative noise of a 16x16 tile below which it requests no more rays; 0: never"),
+    K("integrator.hybrid.thickness", KT_FLOAT, JOB(integrator.hybrid.thickness), 0, NOHI, "0.03",
+      0, "hybrid: how far behind a depth sample a screen-space ray still hits it, relative"),
+    K("integrator.hybrid.screen_steps", KT_UINT, JOB(integrator.hybrid.screen_steps), 0, 4096,
+      "96", 0, "hybrid: most hierarchical depth steps of a screen-space ray; 0: BVH only"),
+    K("integrator.hybrid.bvh_triangles", KT_UINT, JOB(integrator.hybrid.bvh_triangles), 0,
+      UINT32_MAX, "2000000", 0,
+      "hybrid: triangle budget of the BVH, filled with the objects of best score; 0: none"),
+    K("integrator.hybrid.bvh_interval", KT_UINT, JOB(integrator.hybrid.bvh_interval), 1, 100000,
+      "1", 0, "hybrid: frames between BVH builds (frames that are multiples of it build)"),
+    K("integrator.hybrid.queue_rays", KT_UINT, JOB(integrator.hybrid.queue_rays), 0, UINT32_MAX,
+      "0", 0, "hybrid: BVH ray queue capacity; 0: every ray a frame can request"),
+    K("integrator.hybrid.filter_radius", KT_UINT, JOB(integrator.hybrid.filter_radius_px), 0, 16,
+      "6", 0, "hybrid: the filter's radius in pixels at one sample; it shrinks as samples grow"),
+    K("integrator.hybrid.filter_depth", KT_FLOAT, JOB(integrator.hybrid.filter_depth), 0, NOHI,
+      "0.05", 0, "hybrid: relative depth difference at which the filter stops"),
+    K("integrator.hybrid.filter_normal", KT_FLOAT, JOB(integrator.hybrid.filter_normal), -1, 1,
+      "0.9", 0, "hybrid: cosine between normals below which the filter stops"),
     K("integrator.reference.spp", KT_UINT, JOB(integrator.reference.spp), 1, 1048576, "64", 0,
       "reference: samples per pixel"),
     K("integrator.reference.max_bounces", KT_UINT, JOB(integrator.reference.max_bounces), 0, 64,
@@ -1290,6 +1315,21 @@ void rb_job_rehash(struct rb_job *job)
         h = h_u32(h, (uint32_t)b->hit_test);
         h = h_f32(h, b->hit_epsilon);
         h = h_u32(h, (uint32_t)b->samples);
+    }
+    if (kind == RB_INTEGRATOR_HYBRID) {
+        const struct rb_job_hybrid *y = &job->integrator.hybrid;
+        h = h_u32(h, y->rays);
+        h = h_u32(h, y->spp);
+        h = h_u32(h, y->history);
+        h = h_f32(h, y->noise);
+        h = h_f32(h, y->thickness);
+        h = h_u32(h, y->screen_steps);
+        h = h_u32(h, y->bvh_triangles);
+        h = h_u32(h, y->bvh_interval);
+        h = h_u32(h, y->queue_rays); /* an overflowing queue drops rays */
+        h = h_u32(h, y->filter_radius_px);
+        h = h_f32(h, y->filter_depth);
+        h = h_f32(h, y->filter_normal);
     }
     job->hash = h;
 }

@@ -9,6 +9,7 @@
 #include "shared.h"
 #include "view_shared.h"
 #include "bdpt_shared.h"
+#include "hybrid_shared.h"
 
 _Static_assert(sizeof(struct rb_gpu_globals) == 400, "globals layout");
 _Static_assert(sizeof(struct rb_gpu_vertex) == 64, "vertex layout");
@@ -31,6 +32,9 @@ _Static_assert(sizeof(struct rb_gpu_bdpt_connect_push) == 80, "connect push cons
 _Static_assert(sizeof(struct rb_gpu_bdpt_bounce_push) == 32, "bounce push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_emitters_push) == 16, "emitters push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_image_push) == 32, "split/gather/filter push constants");
+_Static_assert(sizeof(struct rb_gpu_hybrid_slot) == 48, "hybrid ray slot layout");
+_Static_assert(sizeof(struct rb_gpu_hybrid_counters) == 48, "hybrid counters layout");
+_Static_assert(sizeof(struct rb_gpu_hybrid_push) == 112, "hybrid push constants");
 _Static_assert(sizeof(struct rb_scene_vertex) == RB_SRC_VERTEX_FLOATS * 4, "source vertex");
 _Static_assert(sizeof(struct rb_scene_morph_delta) == RB_MORPH_DELTA_FLOATS * 4, "morph delta");
 
@@ -403,5 +407,57 @@ void rb_pass_bdpt_filter_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
 /* Equation (1) over the caches into b->light, and the hit ratio into b->hits. */
 void rb_pass_bdpt_reconstruct_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                      const struct rb_frame *frame, const struct rb_bdpt_frame *b);
+
+/* ---- hybrid.c: the hybrid integrator's compute passes (seed 003) ----------------------------- */
+
+/* What the hybrid passes read and write besides the frame (lib/integrators/hybrid.c fills it). */
+struct rb_hybrid_frame {
+    struct rb_gpu_hybrid_push push; /* the frame's settings; each record sets its own fields */
+    uint32_t hiz_levels;
+    uint64_t slot_count; /* every lobe's */
+    struct rb_gpu_buffer hiz;      /* vec2 per cell of every level */
+    struct rb_gpu_buffer slots;    /* struct rb_gpu_hybrid_slot [slot_count] */
+    struct rb_gpu_buffer counters; /* struct rb_gpu_hybrid_counters, host-visible */
+    struct rb_gpu_buffer queue;    /* uint [queue capacity] */
+    struct rb_gpu_buffer blocks;   /* uint per block of slots */
+    struct rb_gpu_buffer bvh_nodes, bvh_tris;
+    struct rb_gpu_buffer tiles;            /* float [2 x tiles] */
+    struct rb_gpu_image acc[2];            /* RB_HYBRID_ACC_LAYERS layers; frame f writes f mod 2 */
+    struct rb_gpu_image stats;             /* samples (diffuse, specular), tile mask */
+    struct rb_gpu_image light[RB_BDPT_LIGHT_COUNT]; /* what the output pass textures */
+    uint32_t cur;                                   /* the accumulator written: frame mod 2 */
+};
+
+struct rb_pass_hybrid;
+enum rb_status rb_pass_hybrid_create(struct rb_gpu *gpu, struct rb_pass_hybrid **out,
+                                     struct rb_err *err);
+void rb_pass_hybrid_destroy(struct rb_pass_hybrid *p);
+/* The hierarchical depth buffer, level by level (barriers between levels are its own). */
+void rb_pass_hybrid_hiz_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                               const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                               struct rb_hybrid_frame *h);
+/* One lobe's rays: requests, screen-space trace, shading of screen hits. Zeroes the counters
+ * first for the diffuse lobe. */
+void rb_pass_hybrid_trace_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                                 const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                                 struct rb_hybrid_frame *h, uint32_t lobe);
+/* The queue of rays for the BVH, in slot order (three dispatches, ordered inside). */
+void rb_pass_hybrid_queue_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                                 const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                                 struct rb_hybrid_frame *h);
+/* The queued rays through the BVH (an indirect dispatch the queue wrote). */
+void rb_pass_hybrid_bvh_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                               const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                               struct rb_hybrid_frame *h);
+void rb_pass_hybrid_accumulate_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                                      const struct rb_frame *frame,
+                                      const struct rb_frame_slot *slot, struct rb_hybrid_frame *h);
+/* The tile mask, then its erosion. */
+void rb_pass_hybrid_tiles_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                                 const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                                 struct rb_hybrid_frame *h);
+void rb_pass_hybrid_filter_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                                  const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                                  struct rb_hybrid_frame *h, uint32_t lobe);
 
 #endif

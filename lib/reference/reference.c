@@ -456,11 +456,11 @@ static enum rb_status prepare_frame(struct rb_reference *ref, int frame, double 
                                            &ref->prev_cam, err);
     if (st)
         return st;
-    rb_ref_deform(ref->scene, ref->prev_pose, ref->prev_pos, 3, NULL, NULL, NULL);
+    rb_scene_deform(ref->scene, ref->prev_pose, ref->prev_pos, 3, NULL, NULL, NULL);
     rb_scene_evaluate(ref->scene, &ref->sel, t, ref->pose);
     if ((st = rb_camera_evaluate(job, ref->scene, &ref->setup, ref->pose, t, &ref->cam, err)))
         return st;
-    rb_ref_deform(ref->scene, ref->pose, ref->pos, 4, ref->nrm, ref->tan, ref->uv);
+    rb_scene_deform(ref->scene, ref->pose, ref->pos, 4, ref->nrm, ref->tan, ref->uv);
     if ((st = update_lights(ref, err)))
         return st;
     update_emitters(ref);

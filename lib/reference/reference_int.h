@@ -118,14 +118,6 @@ float rb_ref_alpha(const struct rb_ref_world *w, uint32_t prim, float u, float v
 /* An orthonormal basis t, b around unit n (Duff et al. 2017, branchless; brdf.c). */
 void rb_ref_basis(const float n[3], float t[3], float b[3]);
 
-/* ---- deformation (deform.c) ------------------------------------------------------------------ */
-
-/* The world-space vertices of every instance of pose, in instance order (as frame.c lays them
- * out), with the math of shaders/animate.comp: morph deltas, then the skin or the node matrix.
- * pos gets pos_stride floats per vertex; nrm (3), tan (4) and uv (2) may be NULL. */
-void rb_ref_deform(const struct rb_scene *scene, const struct rb_scene_pose *pose, float *pos,
-                   size_t pos_stride, float *nrm, float *tan, float *uv);
-
 /* ---- ray casting (embree.c) ---------------------------------------------------------------- */
 
 /* The intersect context every ray uses: Embree's first, so the filter can cast back. */

@@ -53,6 +53,7 @@ struct rb_render {
         float *hits; /* width x height floats, from the first frame that has hit ratios */
         struct rb_pass_time *passes;
         uint32_t pass_cap;
+        struct rb_ray_counts ray_counts;
         double wall_ms;
     } queue[QUEUE_DEPTH];
     uint32_t head, count;    /* the oldest pending entry, and how many are full */
@@ -370,6 +371,7 @@ static enum rb_status write_timing(const struct rb_render *r, const char *exr_pa
         .bundle_nodes_capacity = f->bundle_nodes_capacity,
         .bundle_nodes_dropped = f->bundle_nodes_dropped,
         .hits = f->hits ? &hits : NULL,
+        .ray_counts = f->ray_counts,
     };
     return rb_io_timing_write(path, &t, err);
 }
@@ -472,6 +474,10 @@ static enum rb_status hand_over(struct rb_render *r, const char *path,
     e->f.pixels = e->pixels;
     e->f.hits = f->hits ? e->hits : NULL;
     e->f.passes = e->passes;
+    if (f->ray_counts) {
+        e->ray_counts = *f->ray_counts;
+        e->f.ray_counts = &e->ray_counts;
+    }
     e->wall_ms = wall_ms;
     e->is_full = true;
     r->count++;

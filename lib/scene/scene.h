@@ -264,6 +264,13 @@ enum rb_status rb_scene_pose_create(const struct rb_scene *scene, struct rb_scen
                                     struct rb_err *err);
 void rb_scene_pose_destroy(struct rb_scene_pose *pose);
 
+/* The world-space vertices of every instance of pose, in instance order (as the frame's world
+ * vertex buffer lays them out, lib/integrators/frame.c), with the math of shaders/animate.comp:
+ * morph deltas, then the skin or the node matrix (deform.c). pos gets pos_stride floats per
+ * vertex; nrm (3), tan (4) and uv (2) may be NULL. */
+void rb_scene_deform(const struct rb_scene *scene, const struct rb_scene_pose *pose, float *pos,
+                     size_t pos_stride, float *nrm, float *tan, float *uv);
+
 /* Evaluates the selected clips at time_s (seconds of the sequence; the selection maps it to clip
  * time) into pose. Deterministic and allocation-free. */
 void rb_scene_evaluate(const struct rb_scene *scene, const struct rb_anim_selection *sel,

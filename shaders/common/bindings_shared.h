@@ -168,6 +168,39 @@
 #define RB_BIND_BUNDLE_PROBE_OUT 5
 #define RB_BIND_BUNDLE_PROBE_COUNT 6
 
+/* hybrid_*.comp: one table for every pass of the hybrid integrator (each shader declares what it
+ * uses through hybrid.glsl; lib/passes/hybrid.c binds them all) */
+#define RB_BIND_HYBRID_GLOBALS 0
+#define RB_BIND_HYBRID_GB_POSITION 1
+#define RB_BIND_HYBRID_GB_NORMAL 2
+#define RB_BIND_HYBRID_GB_ALBEDO 3
+#define RB_BIND_HYBRID_GB_SPECULAR 4
+#define RB_BIND_HYBRID_GB_EMISSION 5
+#define RB_BIND_HYBRID_GB_MOTION 6
+#define RB_BIND_HYBRID_LIGHTS 7
+#define RB_BIND_HYBRID_SHADOW_VIEWS 8
+#define RB_BIND_HYBRID_SHADOW_MAPS 9
+#define RB_BIND_HYBRID_ENV_MAP 10
+#define RB_BIND_HYBRID_DIRECT 11   /* the direct pass's light */
+#define RB_BIND_HYBRID_HIZ 12      /* min and max depth, every level */
+#define RB_BIND_HYBRID_SLOTS 13    /* rb_gpu_hybrid_slot per ray */
+#define RB_BIND_HYBRID_COUNTERS 14 /* rb_gpu_hybrid_counters, host-visible */
+#define RB_BIND_HYBRID_QUEUE 15    /* slot indices for the BVH */
+#define RB_BIND_HYBRID_BLOCKS 16   /* queued rays per block of slots, then their prefix sums */
+#define RB_BIND_HYBRID_BVH_NODES 17
+#define RB_BIND_HYBRID_BVH_TRIS 18
+#define RB_BIND_HYBRID_VERTICES 19 /* this frame's world vertices */
+#define RB_BIND_HYBRID_INDICES 20
+#define RB_BIND_HYBRID_MATERIALS 21
+#define RB_BIND_HYBRID_SRGB_TEXTURES 22
+#define RB_BIND_HYBRID_LINEAR_TEXTURES 23
+#define RB_BIND_HYBRID_ACC_PREV 24 /* RB_HYBRID_ACC_LAYERS layers, the previous frame's */
+#define RB_BIND_HYBRID_ACC 25      /* the same, this frame's */
+#define RB_BIND_HYBRID_TILES 26    /* a float per noise tile: 1 where it is done */
+#define RB_BIND_HYBRID_STATS 27    /* samples and tile mask per pixel (the EXR layers) */
+#define RB_BIND_HYBRID_LIGHT 28    /* written: RB_BDPT_LIGHT_COUNT images for the output pass */
+#define RB_BIND_HYBRID_COUNT 32
+
 /* light_table.comp (tests/unit/test_light_parity.c) */
 #define RB_BIND_LIGHT_TABLE_LIGHTS 0
 #define RB_BIND_LIGHT_TABLE_POINTS 1

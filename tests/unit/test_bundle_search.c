@@ -12,7 +12,7 @@
  *   k bundles: k is the new direction.
  * - Embree casts the line the lists sampled for x1: through its texel's centre (the rasterizer's
  *   sample), along s d, from x1's depth plus half a texel (where the search starts), against the
- *   same posed triangles (rb_ref_deform), keeping the nearest that faces the line's origin, as the
+ *   same posed triangles (rb_scene_deform), keeping the nearest that faces the line's origin, as the
  *   search keeps the nodes that face x1.
  * - A sample agrees when both miss, or both hit at distances within one texel of the grid with
  *   interpolated normals within NORMAL_COS (the same surface). For each direction, s = +1
@@ -200,7 +200,7 @@ static void mesh_init(struct mesh *m, const struct rb_scene *scene,
     m->nrm = malloc((verts + 1) * 3 * sizeof(float));
     m->tris = malloc((tris + 1) * 3 * sizeof(uint32_t));
     assert_true(m->pos && m->nrm && m->tris);
-    rb_ref_deform(scene, pose, m->pos, 4, m->nrm, NULL, NULL);
+    rb_scene_deform(scene, pose, m->pos, 4, m->nrm, NULL, NULL);
     uint32_t dst = 0, t = 0;
     for (uint32_t i = 0; i < pose->instance_count; i++) {
         const struct rb_scene_primitive *p = &scene->primitives[pose->instances[i].primitive];

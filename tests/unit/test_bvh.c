@@ -458,7 +458,7 @@ static bool world_load(const char *path, struct world *w)
     w->tris = malloc((tris + 1) * 3 * sizeof(uint32_t));
     w->objects = malloc((pose->instance_count + 1) * sizeof(*w->objects));
     assert_true(w->pos && w->tris && w->objects);
-    rb_ref_deform(scene, pose, w->pos, 4, NULL, NULL, NULL);
+    rb_scene_deform(scene, pose, w->pos, 4, NULL, NULL, NULL);
     uint32_t dst = 0, t = 0;
     for (uint32_t i = 0; i < pose->instance_count; i++) {
         const struct rb_scene_primitive *p = &scene->primitives[pose->instances[i].primitive];

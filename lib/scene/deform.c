@@ -1,10 +1,25 @@
-/* CPU deformation for the reference: shaders/animate.comp transcribed, so the reference traces
- * the vertices the rasterizer draws. Morph deltas weighted in; then the weighted joint matrices
+/* CPU deformation: shaders/animate.comp transcribed, so the reference traces (and the hybrid
+ * integrator's BVH holds) the vertices the rasterizer draws. Morph deltas weighted in; then the weighted joint matrices
  * divided by the weight sum for a skinned vertex, else the node's world matrix; normals through
  * the inverse transpose, tangents through the upper 3x3. Single precision, like the shader. */
-#include "reference/reference_int.h"
+#include "scene/scene.h"
 
 #include <math.h>
+
+static float dot3(const float a[3], const float b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void cross3(const float a[3], const float b[3], float out[3])
+{
+    float x = a[1] * b[2] - a[2] * b[1];
+    float y = a[2] * b[0] - a[0] * b[2];
+    float z = a[0] * b[1] - a[1] * b[0];
+    out[0] = x;
+    out[1] = y;
+    out[2] = z;
+}
 
 /* GLSL's mat4 * vec4 for column-major m: sum of columns times components. */
 static void mat_vec4(const struct rb_mat4 *m, const float v[4], float out[4])
@@ -38,10 +53,10 @@ static void mat3_vec(const struct mat3 *m, const float v[3], float out[3])
 static struct mat3 inverse_transpose3(const struct mat3 *a)
 {
     struct mat3 r;
-    rb_ref_cross(a->c[1], a->c[2], r.c[0]);
-    rb_ref_cross(a->c[2], a->c[0], r.c[1]);
-    rb_ref_cross(a->c[0], a->c[1], r.c[2]);
-    float det = rb_ref_dot(a->c[0], r.c[0]);
+    cross3(a->c[1], a->c[2], r.c[0]);
+    cross3(a->c[2], a->c[0], r.c[1]);
+    cross3(a->c[0], a->c[1], r.c[2]);
+    float det = dot3(a->c[0], r.c[0]);
     for (int c = 0; c < 3; c++)
         for (int k = 0; k < 3; k++)
             r.c[c][k] /= det;
@@ -50,7 +65,7 @@ static struct mat3 inverse_transpose3(const struct mat3 *a)
 
 static void safe_normalize(const float v[3], const float fallback[3], float out[3])
 {
-    float l = sqrtf(rb_ref_dot(v, v));
+    float l = sqrtf(dot3(v, v));
     for (int i = 0; i < 3; i++)
         out[i] = l > 1e-20f ? v[i] / l : fallback[i];
 }
@@ -76,8 +91,8 @@ static struct rb_mat4 skin_matrix(const struct rb_scene_pose *pose, uint32_t fir
     return m;
 }
 
-void rb_ref_deform(const struct rb_scene *scene, const struct rb_scene_pose *pose, float *pos,
-                   size_t pos_stride, float *nrm, float *tan, float *uv)
+void rb_scene_deform(const struct rb_scene *scene, const struct rb_scene_pose *pose, float *pos,
+                     size_t pos_stride, float *nrm, float *tan, float *uv)
 {
     static const float up[3] = {0.0f, 1.0f, 0.0f}, right[3] = {1.0f, 0.0f, 0.0f};
     size_t dst = 0;

@@ -1,0 +1,412 @@
+/* The hybrid integrator: deferred path tracing, seed 003 (DESIGN.md "hybrid"). Its frame:
+ *   animate -> gbuffer -> shadow -> direct -> hiz -> diffuse_rays -> specular_rays -> ray_queue
+ *   -> bvh_rays -> accumulate -> tiles -> diffuse_filter -> specular_filter -> output
+ * Rasterize what can be rasterized (the G-buffer, shadow maps), sample each lobe of the BRDF at
+ * every pixel that still wants samples, trace in screen space first and through a BVH (built on
+ * the CPU with Embree's builder, lib/bvh) what the screen cannot answer, shade both kinds of hit
+ * alike, accumulate over time and filter with a kernel that shrinks as samples grow.
+ *
+ * History. Two accumulators take every sample; accumulator A starts again on the frames
+ * sequence_start + kW, B on sequence_start + kW + W/2 (and both on sequence_start), W =
+ * integrator.hybrid.history. The output reads the one that started longer ago; the rays'
+ * requests follow the younger one, and a frame that starts one ignores the noise tiles, so no
+ * request depends on anything before the older one's start. A frame's state therefore depends on
+ * the W frames before it at most (history_frames = W): a chunk that renders them first as
+ * warm-ups gets the bits of a whole run. Warm-ups before the job's first frame record nothing
+ * but animate. The BVH is built from the pose of the last frame that is a multiple of
+ * bvh_interval after sequence_start, whatever frame the run began at. */
+#include "integrators/integrators_int.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bvh/bvh.h"
+
+struct hybrid {
+    struct rb_base base;
+    struct rb_pass_hybrid *passes;
+    struct rb_hybrid_frame h;
+    const struct rb_job_hybrid *settings;
+    uint32_t queue_capacity;
+    /* the BVH's inputs: the world vertices of a pose and the frame's triangle list */
+    float *positions;
+    uint32_t *indices;
+    uint32_t triangle_count;
+    struct rb_bvh_object *objects;
+    uint32_t object_count;
+    struct rb_scene_pose *bvh_pose;
+    uint32_t node_capacity, tri_capacity;
+    bool has_bvh;
+    int64_t bvh_epoch; /* the frame whose pose the BVH holds */
+    struct rb_ray_counts counts;
+    bool has_counts;
+};
+
+static uint32_t history_frames(const struct rb_job *job)
+{
+    return job->integrator.hybrid.history;
+}
+
+static void destroy(struct rb_integrator *it, void *state)
+{
+    struct hybrid *d = state;
+    if (!d)
+        return;
+    struct rb_gpu *gpu = it->gpu;
+    struct rb_hybrid_frame *h = &d->h;
+    struct rb_gpu_buffer *bufs[] = {&h->hiz,    &h->slots,     &h->counters, &h->queue,
+                                    &h->blocks, &h->bvh_nodes, &h->bvh_tris, &h->tiles};
+    for (size_t i = 0; i < COUNT(bufs); i++)
+        rb_gpu_buffer_release(gpu, bufs[i]);
+    for (uint32_t i = 0; i < 2; i++)
+        rb_gpu_image_release(gpu, &h->acc[i]);
+    rb_gpu_image_release(gpu, &h->stats);
+    for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
+        rb_gpu_image_release(gpu, &h->light[i]);
+    rb_pass_hybrid_destroy(d->passes);
+    rb_base_destroy(&d->base);
+    rb_scene_pose_destroy(d->bvh_pose);
+    free(d->positions);
+    free(d->indices);
+    free(d->objects);
+    free(d);
+}
+
+/* The scene's triangles as the frame's index buffer lists them, and each instance's range. */
+static enum rb_status geometry_init(struct rb_integrator *it, struct hybrid *d, struct rb_err *err)
+{
+    const struct rb_scene *scene = it->scene;
+    const struct rb_scene_pose *pose = it->cur.pose;
+    uint64_t icount = 0;
+    d->indices = rb_frame_world_indices(scene, pose, &icount);
+    d->positions = malloc(((size_t)it->frame.vertex_count + 1) * 3 * sizeof(float));
+    d->objects = malloc(((size_t)pose->instance_count + 1) * sizeof(*d->objects));
+    if (!d->indices || !d->positions || !d->objects)
+        return rb_errf(err, RB_E_NOMEM, "out of memory for the BVH's %llu triangles",
+                       (unsigned long long)(icount / 3));
+    d->triangle_count = (uint32_t)(icount / 3);
+    uint32_t first = 0;
+    for (uint32_t i = 0; i < pose->instance_count; i++) {
+        uint32_t n = scene->primitives[pose->instances[i].primitive].index_count / 3;
+        d->objects[i] = (struct rb_bvh_object){.first_triangle = first, .triangle_count = n};
+        first += n;
+    }
+    d->object_count = pose->instance_count;
+    return rb_scene_pose_create(scene, &d->bvh_pose, err);
+}
+
+static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *d,
+                                       struct rb_err *err)
+{
+    struct rb_gpu *gpu = it->gpu;
+    const struct rb_job_hybrid *s = d->settings;
+    struct rb_hybrid_frame *h = &d->h;
+    uint32_t w = it->frame.width_px, ht = it->frame.height_px;
+    const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+                                       VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    uint64_t cells = 0;
+    h->hiz_levels = 0;
+    for (uint32_t lw = w, lh = ht;; lw = (lw + 1) / 2, lh = (lh + 1) / 2) {
+        cells += (uint64_t)lw * lh;
+        h->hiz_levels++;
+        if (lw == 1 && lh == 1)
+            break;
+    }
+    h->slot_count = 2ull * s->rays * w * ht;
+    uint64_t capacity = s->queue_rays ? s->queue_rays : h->slot_count;
+    d->queue_capacity = (uint32_t)(capacity < h->slot_count ? capacity : h->slot_count);
+    uint64_t blocks = (h->slot_count + RB_HYBRID_QUEUE_GROUP - 1) / RB_HYBRID_QUEUE_GROUP;
+    uint64_t tiles = (uint64_t)((w + RB_HYBRID_TILE - 1) / RB_HYBRID_TILE) *
+                     ((ht + RB_HYBRID_TILE - 1) / RB_HYBRID_TILE);
+    uint64_t budget = s->bvh_triangles < d->triangle_count ? s->bvh_triangles : d->triangle_count;
+    d->tri_capacity = (uint32_t)(budget ? budget : 1);
+    d->node_capacity = 2 * d->tri_capacity + 1;
+    enum rb_status st;
+    if ((st = rb_gpu_check_buffer_size(gpu, "hybrid", "ray slots",
+                                       h->slot_count * sizeof(struct rb_gpu_hybrid_slot), err)) ||
+        (st = rb_frame_buffer(gpu, cells * 2 * sizeof(float), storage, false, "hybrid.hiz",
+                              &h->hiz, err)) ||
+        (st = rb_frame_buffer(gpu, h->slot_count * sizeof(struct rb_gpu_hybrid_slot), storage,
+                              false, "hybrid.slots", &h->slots, err)) ||
+        (st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_hybrid_counters),
+                              storage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, true,
+                              "hybrid.counters", &h->counters, err)) ||
+        (st = rb_frame_buffer(gpu, (uint64_t)d->queue_capacity * sizeof(uint32_t), storage, false,
+                              "hybrid.queue", &h->queue, err)) ||
+        (st = rb_frame_buffer(gpu, blocks * sizeof(uint32_t), storage, false, "hybrid.blocks",
+                              &h->blocks, err)) ||
+        (st = rb_frame_buffer(gpu, (uint64_t)d->node_capacity * sizeof(struct rb_gpu_bvh_node),
+                              storage, true, "hybrid.bvh_nodes", &h->bvh_nodes, err)) ||
+        (st = rb_frame_buffer(gpu, (uint64_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle),
+                              storage, true, "hybrid.bvh_tris", &h->bvh_tris, err)) ||
+        (st = rb_frame_buffer(gpu, 2 * tiles * sizeof(float), storage, false, "hybrid.tiles",
+                              &h->tiles, err)))
+        return st;
+    const VkImageUsageFlags image_use = VK_IMAGE_USAGE_STORAGE_BIT;
+    static const char *const acc_names[2] = {"hybrid.acc0", "hybrid.acc1"};
+    static const char *const light_names[RB_BDPT_LIGHT_COUNT] = {
+        "hybrid.direct_diffuse", "hybrid.direct_specular", "hybrid.indirect_diffuse",
+        "hybrid.indirect_specular"};
+    for (uint32_t i = 0; i < 2; i++)
+        if ((st = rb_frame_image(gpu, w, ht, RB_HYBRID_ACC_LAYERS, VK_FORMAT_R32G32B32A32_SFLOAT,
+                                 image_use, false, acc_names[i], &h->acc[i], err)))
+            return st;
+    for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
+        if ((st = rb_frame_image(gpu, w, ht, 1, VK_FORMAT_R32G32B32A32_SFLOAT, image_use, false,
+                                 light_names[i], &h->light[i], err)))
+            return st;
+    if ((st = rb_frame_image(gpu, w, ht, 1, VK_FORMAT_R32G32B32A32_SFLOAT, image_use, false,
+                             "hybrid.stats", &h->stats, err)))
+        return st;
+    /* Images to GENERAL, where they stay; the tile mask starts empty (a frame that starts an
+     * accumulator does not read it, but no bit is left to chance). */
+    VkCommandBuffer cmd;
+    if ((st = rb_gpu_oneshot_begin(gpu, &cmd, err)))
+        return st;
+    struct rb_gpu_image *images[] = {&h->acc[0],   &h->acc[1],   &h->stats,   &h->light[0],
+                                     &h->light[1], &h->light[2], &h->light[3]};
+    _Static_assert(RB_BDPT_LIGHT_COUNT == 4, "every light image listed");
+    for (size_t i = 0; i < COUNT(images); i++)
+        rb_gpu_image_barrier(gpu, cmd, images[i], VK_IMAGE_LAYOUT_UNDEFINED,
+                             VK_IMAGE_LAYOUT_GENERAL);
+    vkCmdFillBuffer(cmd, h->tiles.buffer, 0, VK_WHOLE_SIZE, 0);
+    return rb_gpu_oneshot_end(gpu, cmd, err);
+}
+
+static enum rb_status create(struct rb_integrator *it, void **state, struct rb_err *err)
+{
+    struct hybrid *d = calloc(1, sizeof(*d));
+    if (!d)
+        return rb_errf(err, RB_E_NOMEM, "out of memory");
+    d->settings = &it->job->integrator.hybrid;
+    d->bvh_epoch = INT64_MIN;
+    enum rb_status st;
+    if ((st = rb_base_create(it, &d->base, err)) ||
+        (st = rb_pass_hybrid_create(it->gpu, &d->passes, err)) ||
+        (st = geometry_init(it, d, err)) || (st = create_resources(it, d, err))) {
+        destroy(it, d);
+        return st;
+    }
+    *state = d;
+    return RB_OK;
+}
+
+/* The frame whose pose the BVH of frame f holds: the last multiple of bvh_interval from the
+ * sequence's start. */
+static int64_t bvh_epoch(const struct rb_integrator *it, const struct hybrid *d, int frame)
+{
+    int64_t rel = (int64_t)frame - it->job->sequence_start;
+    int64_t k = d->settings->bvh_interval;
+    int64_t m = ((rel % k) + k) % k;
+    return (int64_t)frame - m;
+}
+
+/* Builds the BVH of the pose at frame epoch and uploads it. */
+static enum rb_status build_bvh(struct rb_integrator *it, struct hybrid *d, int64_t epoch,
+                                struct rb_err *err)
+{
+    rb_scene_evaluate(it->scene, &it->sel, (double)epoch / it->job->rate_fps, d->bvh_pose);
+    rb_scene_deform(it->scene, d->bvh_pose, d->positions, 3, NULL, NULL, NULL);
+    const struct rb_bvh_mesh mesh = {.positions = d->positions,
+                                     .stride_floats = 3,
+                                     .vertex_count = it->frame.vertex_count,
+                                     .indices = d->indices,
+                                     .triangle_count = d->triangle_count};
+    struct rb_bvh bvh = {0};
+    enum rb_status st = rb_bvh_build(&(struct rb_bvh_desc){.mesh = &mesh,
+                                                           .objects = d->objects,
+                                                           .object_count = d->object_count,
+                                                           .triangle_budget =
+                                                               d->settings->bvh_triangles,
+                                                           .thread_count = 0},
+                                     &bvh, err);
+    if (st) {
+        rb_err_prefix(err, "hybrid: the BVH of frame %lld", (long long)epoch);
+        return st;
+    }
+    if (bvh.node_count > d->node_capacity || bvh.triangle_count > d->tri_capacity) {
+        st = rb_errf(err, RB_E_INVALID,
+                     "hybrid: the BVH of frame %lld has %u nodes and %u triangles, more than "
+                     "the %u and %u it was given room for",
+                     (long long)epoch, bvh.node_count, bvh.triangle_count, d->node_capacity,
+                     d->tri_capacity);
+    } else {
+        memcpy(d->h.bvh_nodes.mapped, bvh.nodes, bvh.node_count * sizeof(*bvh.nodes));
+        memcpy(d->h.bvh_tris.mapped, bvh.triangles, bvh.triangle_count * sizeof(*bvh.triangles));
+        if (bvh.triangles_left_out)
+            rb_log(RB_LOG_INFO,
+                   "hybrid: the BVH holds %u of %u objects (%u triangles); %llu triangles left "
+                   "out by the budget of %u",
+                   bvh.objects_included, bvh.object_count, bvh.triangle_count,
+                   (unsigned long long)bvh.triangles_left_out, d->settings->bvh_triangles);
+        d->bvh_epoch = epoch;
+        d->has_bvh = true;
+    }
+    rb_bvh_release(&bvh);
+    return st;
+}
+
+static enum rb_status prepare(struct rb_integrator *it, void *state, const struct rb_frame_ctx *ctx,
+                              struct rb_err *err)
+{
+    struct hybrid *d = state;
+    if (ctx->frame < it->job->sequence_start)
+        return RB_OK;
+    int64_t epoch = bvh_epoch(it, d, ctx->frame);
+    if (d->has_bvh && d->bvh_epoch == epoch)
+        return RB_OK;
+    return build_bvh(it, d, epoch, err);
+}
+
+/* The frame's settings in the push constants: which accumulator starts again, which one the
+ * output reads and which the requests follow (the history contract above). */
+static void set_push(const struct rb_integrator *it, struct hybrid *d, int frame)
+{
+    const struct rb_job_hybrid *s = d->settings;
+    struct rb_gpu_hybrid_push *p = &d->h.push;
+    uint32_t w = s->history, half = s->history / 2;
+    uint64_t rel = (uint64_t)((int64_t)frame - it->job->sequence_start);
+    uint64_t last_a = rel - rel % w;
+    uint64_t last_b = rel < half ? 0 : rel - (rel - half) % w;
+    bool b_older = last_b < last_a;
+    struct rb_vec3 lo = it->setup.bounds_min, hi = it->setup.bounds_max;
+    float dx = hi.x - lo.x, dy = hi.y - lo.y, dz = hi.z - lo.z;
+    *p = (struct rb_gpu_hybrid_push){
+        .frame = {(uint32_t)frame, s->rays, 0, (uint32_t)(d->h.slot_count / 2)},
+        .history = {rel % w == 0, rel == 0 || (rel >= half && (rel - half) % w == 0), b_older,
+                    !b_older},
+        .sizes = {s->spp, s->screen_steps, d->queue_capacity, d->h.hiz_levels},
+        .more = {0, 0, 0, s->filter_radius_px},
+        .params = {s->noise, s->thickness, s->filter_depth, s->filter_normal},
+        .scene = {sqrtf(dx * dx + dy * dy + dz * dz), 1e-4f, 0.0f, 0.0f},
+    };
+    d->h.cur = (uint32_t)frame & 1u;
+}
+
+/* Every resource of the integrator's own and the frame's a hybrid pass may touch, with how:
+ * the passes share one binding table, so each declares the whole of it. */
+static void begin(struct rb_integrator *it, struct hybrid *d, VkCommandBuffer cmd,
+                  const struct rb_frame_ctx *ctx, const char *name)
+{
+    struct rb_frame *frame = &it->frame;
+    struct rb_hybrid_frame *h = &d->h;
+    const struct rb_gpu_image *gb = frame->gbuffer;
+    const enum rb_gpu_use rw = RB_GPU_COMPUTE_READ_WRITE, rd = RB_GPU_COMPUTE_READ;
+    struct rb_gpu_access uses[28 + RB_BDPT_LIGHT_COUNT] = {
+        {.buffer = &frame->globals, .use = RB_GPU_COMPUTE_UNIFORM},
+        {.image = &gb[RB_GB_POSITION], .use = rd},
+        {.image = &gb[RB_GB_NORMAL], .use = rd},
+        {.image = &gb[RB_GB_ALBEDO], .use = rd},
+        {.image = &gb[RB_GB_SPECULAR], .use = rd},
+        {.image = &gb[RB_GB_EMISSION], .use = rd},
+        {.image = &gb[RB_GB_MOTION], .use = rd},
+        {.buffer = &frame->lights, .use = rd},
+        {.buffer = &frame->shadow_views, .use = rd},
+        {.image = &frame->shadow_maps, .use = RB_GPU_COMPUTE_SAMPLED},
+        {.image = &frame->env_map, .use = RB_GPU_COMPUTE_SAMPLED},
+        {.image = &frame->direct, .use = rd},
+        {.buffer = &h->hiz, .use = rw},
+        {.buffer = &h->slots, .use = rw},
+        {.buffer = &h->counters, .use = rw},
+        {.buffer = &h->queue, .use = rw},
+        {.buffer = &h->blocks, .use = rw},
+        {.buffer = &h->bvh_nodes, .use = rd},
+        {.buffer = &h->bvh_tris, .use = rd},
+        {.buffer = &ctx->cur->vertices, .use = rd},
+        {.buffer = &frame->indices, .use = rd},
+        {.buffer = &frame->materials, .use = rd},
+        {.image = &frame->srgb_textures, .use = RB_GPU_COMPUTE_SAMPLED},
+        {.image = &frame->linear_textures, .use = RB_GPU_COMPUTE_SAMPLED},
+        {.image = &h->acc[h->cur ^ 1u], .use = rd},
+        {.image = &h->acc[h->cur], .use = rw},
+        {.buffer = &h->tiles, .use = rw},
+        {.image = &h->stats, .use = rw},
+    };
+    uint32_t count = 28;
+    for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
+        uses[count++] = (struct rb_gpu_access){.image = &h->light[i], .use = rw};
+    rb_integrator_pass_begin(it, cmd, name, uses, count);
+}
+
+static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
+                   const struct rb_frame_ctx *ctx)
+{
+    struct hybrid *d = state;
+    struct rb_base *b = &d->base;
+    struct rb_hybrid_frame *h = &d->h;
+    struct rb_pass_hybrid *p = d->passes;
+    const struct rb_frame *frame = &it->frame;
+    const struct rb_frame_slot *slot = ctx->cur;
+    d->has_counts = false;
+    rb_base_record_animate(it, b->animate, cmd, ctx->cur);
+    if (ctx->frame < it->job->sequence_start)
+        return; /* before the sequence: nothing a frame of it reads */
+    rb_base_record_gbuffer(it, b, cmd, ctx, NULL);
+    rb_base_record_shadow(it, b, cmd, ctx);
+    rb_base_record_direct_light(it, b, cmd);
+    set_push(it, d, ctx->frame);
+    begin(it, d, cmd, ctx, "hiz");
+    rb_pass_hybrid_hiz_record(p, cmd, frame, slot, h);
+    rb_integrator_pass_end(it, cmd);
+    begin(it, d, cmd, ctx, "diffuse_rays");
+    rb_pass_hybrid_trace_record(p, cmd, frame, slot, h, RB_HYBRID_DIFFUSE);
+    rb_integrator_pass_end(it, cmd);
+    begin(it, d, cmd, ctx, "specular_rays");
+    rb_pass_hybrid_trace_record(p, cmd, frame, slot, h, RB_HYBRID_SPECULAR);
+    rb_integrator_pass_end(it, cmd);
+    begin(it, d, cmd, ctx, "ray_queue");
+    rb_pass_hybrid_queue_record(p, cmd, frame, slot, h);
+    rb_integrator_pass_end(it, cmd);
+    begin(it, d, cmd, ctx, "bvh_rays");
+    rb_pass_hybrid_bvh_record(p, cmd, frame, slot, h);
+    rb_integrator_pass_end(it, cmd);
+    begin(it, d, cmd, ctx, "accumulate");
+    rb_pass_hybrid_accumulate_record(p, cmd, frame, slot, h);
+    rb_integrator_pass_end(it, cmd);
+    begin(it, d, cmd, ctx, "tiles");
+    rb_pass_hybrid_tiles_record(p, cmd, frame, slot, h);
+    rb_integrator_pass_end(it, cmd);
+    if (ctx->is_warmup)
+        return;
+    begin(it, d, cmd, ctx, "diffuse_filter");
+    rb_pass_hybrid_filter_record(p, cmd, frame, slot, h, RB_HYBRID_DIFFUSE);
+    rb_integrator_pass_end(it, cmd);
+    begin(it, d, cmd, ctx, "specular_filter");
+    rb_pass_hybrid_filter_record(p, cmd, frame, slot, h, RB_HYBRID_SPECULAR);
+    rb_integrator_pass_end(it, cmd);
+    rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
+                          VK_ACCESS_2_HOST_READ_BIT);
+    rb_base_record_output(it, b, cmd, h->light);
+    d->has_counts = true;
+}
+
+static void collect(struct rb_integrator *it, void *state, struct rb_frame_result *out)
+{
+    (void)it;
+    struct hybrid *d = state;
+    out->nonfinite_count = rb_pass_output_nonfinite_count(d->base.output);
+    if (!d->has_counts)
+        return;
+    const struct rb_gpu_hybrid_counters *c = d->h.counters.mapped;
+    d->counts = (struct rb_ray_counts){
+        .requested = c->rays[0],
+        .screen_hits = c->rays[1],
+        .queued = c->rays[2],
+        .bvh_hits = c->rays[3],
+        .misses = c->more[0],
+        .dropped = c->more[1],
+    };
+    out->ray_counts = &d->counts;
+}
+
+const struct rb_integrator_ops rb_integrator_hybrid = {
+    .name = "hybrid",
+    .history_frames = history_frames,
+    .create = create,
+    .prepare = prepare,
+    .record = record,
+    .collect = collect,
+    .destroy = destroy,
+};

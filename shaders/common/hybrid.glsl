@@ -1,0 +1,188 @@
+// The hybrid integrator's resources (one binding table for all its passes) and what its passes
+// share: the quasi-random numbers of a ray, BRDF sampling of each lobe, shading at a hit,
+// reprojection into the previous frame. The including shader defines its local size first; the
+// BVH's buffers are hybrid_bvh.comp's alone.
+#ifndef RB_HYBRID_GLSL
+#define RB_HYBRID_GLSL
+
+#include "bindings_shared.h"
+#include "shared.h"
+#include "bdpt_shared.h"
+#include "hybrid_shared.h"
+#include "brdf.glsl"
+#include "encode.glsl"
+#include "lights.glsl"
+#include "material.glsl"
+
+layout(std140, binding = RB_BIND_HYBRID_GLOBALS) uniform Globals { rb_gpu_globals g; };
+layout(binding = RB_BIND_HYBRID_GB_POSITION, rgba32f) uniform readonly image2D gb_position;
+layout(binding = RB_BIND_HYBRID_GB_NORMAL, rgba32f) uniform readonly image2D gb_normal;
+layout(binding = RB_BIND_HYBRID_GB_ALBEDO, rgba32f) uniform readonly image2D gb_albedo;
+layout(binding = RB_BIND_HYBRID_GB_SPECULAR, rgba32f) uniform readonly image2D gb_specular;
+layout(binding = RB_BIND_HYBRID_GB_EMISSION, rgba32f) uniform readonly image2D gb_emission;
+layout(binding = RB_BIND_HYBRID_GB_MOTION, rgba32f) uniform readonly image2D gb_motion;
+layout(std430, binding = RB_BIND_HYBRID_LIGHTS) readonly buffer Lights { rb_gpu_light lights[]; };
+layout(std430, binding = RB_BIND_HYBRID_SHADOW_VIEWS) readonly buffer Views { rb_gpu_shadow_view views[]; };
+layout(binding = RB_BIND_HYBRID_SHADOW_MAPS) uniform sampler2DArray shadow_maps;
+layout(binding = RB_BIND_HYBRID_ENV_MAP) uniform sampler2D env_map;
+layout(binding = RB_BIND_HYBRID_DIRECT, rgba32f) uniform readonly image2D direct_light;
+layout(std430, binding = RB_BIND_HYBRID_HIZ) buffer Hiz { vec2 hiz[]; };
+layout(std430, binding = RB_BIND_HYBRID_SLOTS) buffer Slots { rb_gpu_hybrid_slot slots[]; };
+layout(std430, binding = RB_BIND_HYBRID_COUNTERS) buffer Counters { rb_gpu_hybrid_counters counters; };
+layout(std430, binding = RB_BIND_HYBRID_QUEUE) buffer Queue { uint queue[]; };
+layout(std430, binding = RB_BIND_HYBRID_BLOCKS) buffer Blocks { uint blocks[]; };
+layout(std430, binding = RB_BIND_HYBRID_VERTICES) readonly buffer Verts { rb_gpu_vertex verts[]; };
+layout(std430, binding = RB_BIND_HYBRID_INDICES) readonly buffer Indices { uint indices[]; };
+layout(std430, binding = RB_BIND_HYBRID_MATERIALS) readonly buffer Materials { rb_gpu_material materials[]; };
+layout(binding = RB_BIND_HYBRID_SRGB_TEXTURES) uniform sampler2DArray srgb_textures;
+layout(binding = RB_BIND_HYBRID_LINEAR_TEXTURES) uniform sampler2DArray linear_textures;
+layout(binding = RB_BIND_HYBRID_ACC_PREV, rgba32f) uniform readonly image2DArray acc_prev;
+layout(binding = RB_BIND_HYBRID_ACC, rgba32f) uniform image2DArray acc;
+layout(std430, binding = RB_BIND_HYBRID_TILES) buffer Tiles { float tiles[]; };
+layout(binding = RB_BIND_HYBRID_STATS, rgba32f) uniform image2D stats;
+layout(binding = RB_BIND_HYBRID_LIGHT + RB_BDPT_DIRECT_DIFFUSE, rgba32f) uniform writeonly image2D o_direct_diffuse;
+layout(binding = RB_BIND_HYBRID_LIGHT + RB_BDPT_DIRECT_SPECULAR, rgba32f) uniform writeonly image2D o_direct_specular;
+layout(binding = RB_BIND_HYBRID_LIGHT + RB_BDPT_INDIRECT_DIFFUSE, rgba32f) uniform writeonly image2D o_indirect_diffuse;
+layout(binding = RB_BIND_HYBRID_LIGHT + RB_BDPT_INDIRECT_SPECULAR, rgba32f) uniform writeonly image2D o_indirect_specular;
+
+layout(push_constant) uniform Push { rb_gpu_hybrid_push pc; };
+
+#include "shadow.glsl"
+#include "punctual.glsl"
+
+float rb_lum(vec3 c)
+{
+    return dot(c, vec3(0.2126, 0.7152, 0.0722));
+}
+
+uint rb_hybrid_slot(uint lobe, uint ray, ivec2 px)
+{
+    return ((lobe * pc.frame.y + ray) * g.size.y + uint(px.y)) * g.size.x + uint(px.x);
+}
+
+// A 32-bit integer hash (Wang's), for each pixel's and lobe's rotation of the sequence.
+uint rb_hash(uint x)
+{
+    x = (x ^ 61u) ^ (x >> 16);
+    x *= 9u;
+    x ^= x >> 4;
+    x *= 0x27d4eb2du;
+    x ^= x >> 15;
+    return x;
+}
+
+// The two random numbers of sample k of a pixel's lobe: point k of the R2 sequence (Roberts'
+// additive recurrence on the plastic number), shifted by the pixel's own rotation (Cranley-
+// Patterson), all in 32-bit fixed point so every device computes the same bits. k counts the
+// frame's rays from the frame index, so consecutive frames stratify each other.
+vec2 rb_hybrid_u(uint k, ivec2 px, uint lobe)
+{
+    uint h = rb_hash(uint(px.x) * 0x9e3779b9u ^ rb_hash(uint(px.y) + 0x85ebca6bu * (lobe + 1u)));
+    uvec2 r = uvec2(k * 3242174889u + h, k * 2447445414u + rb_hash(h));
+    return vec2(r >> 8) * (1.0 / 16777216.0);
+}
+
+// An orthonormal frame around n (Duff et al. 2017).
+void rb_basis(vec3 n, out vec3 t, out vec3 b)
+{
+    float s = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + n.z);
+    float c = n.x * n.y * a;
+    t = vec3(1.0 + s * n.x * n.x * a, s * c, -s * n.x);
+    b = vec3(c, s + n.y * n.y * a, -n.y);
+}
+
+// GGX visible-normal sampling (Heitz 2018) of the half vector for v, in the frame (t, b, n).
+vec3 rb_sample_vndf(vec3 v, vec3 t, vec3 b, vec3 n, float alpha, vec2 u)
+{
+    vec3 vl = vec3(dot(v, t), dot(v, b), max(dot(v, n), 1e-4));
+    vec3 vh = normalize(vec3(alpha * vl.x, alpha * vl.y, vl.z));
+    float lensq = vh.x * vh.x + vh.y * vh.y;
+    vec3 t1 = lensq > 0.0 ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(lensq) : vec3(1.0, 0.0, 0.0);
+    vec3 t2 = cross(vh, t1);
+    float r = sqrt(u.x);
+    float phi = 2.0 * RB_PI * u.y;
+    float p1 = r * cos(phi);
+    float p2 = r * sin(phi);
+    float s = 0.5 * (1.0 + vh.z);
+    p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * p2;
+    vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
+    vec3 hl = normalize(vec3(alpha * nh.x, alpha * nh.y, max(0.0, nh.z)));
+    return hl.x * t + hl.y * b + hl.z * n;
+}
+
+// Smith's G1 for GGX.
+float rb_g1(float ndx, float alpha)
+{
+    float a2 = alpha * alpha;
+    float c = max(ndx, 1e-4);
+    return 2.0 * c / (c + sqrt(a2 + (1.0 - a2) * c * c));
+}
+
+// Samples one lobe of the camera vertex's BRDF: the direction l and the weight BRDF-lobe x
+// cos / pdf, untextured (diffuse: over c_diff; specular: over the gray specular map) as the
+// output pass textures it. Returns false when the sample carries nothing.
+bool rb_hybrid_sample(uint lobe, vec3 n, vec3 ng, vec3 v, vec3 f0, float f90, float roughness,
+                      vec2 u, out vec3 l, out vec3 weight)
+{
+    vec3 t, b;
+    rb_basis(n, t, b);
+    weight = vec3(0.0);
+    if (lobe == RB_HYBRID_DIFFUSE) {
+        // Cosine-weighted: (1 - F) / pi x cos / (cos / pi) = 1 - F(v.h).
+        float r = sqrt(u.x), phi = 2.0 * RB_PI * u.y;
+        l = normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(1.0 - u.x, 0.0)) * n);
+        vec3 kd, ks;
+        rb_brdf_parts(n, v, l, f0, f90, roughness, kd, ks);
+        weight = kd * RB_PI;
+    } else {
+        float alpha = max(roughness * roughness, 1e-4);
+        vec3 h = rb_sample_vndf(v, t, b, n, alpha, u);
+        l = reflect(-v, h);
+        float ndl = dot(n, l);
+        if (ndl <= 0.0)
+            return false;
+        // pdf = G1(v) D (v.h) / (n.v) / (4 v.h), so F D V cos / pdf = F 4 V (n.v) cos / G1(v).
+        vec3 F;
+        float D, V;
+        if (!rb_ggx(n, v, l, f0, f90, roughness, F, D, V))
+            return false;
+        float ndv = max(dot(n, v), 1e-4);
+        weight = F * (4.0 * V * ndv * ndl / rb_g1(ndv, alpha)) / rb_spec_map(f0);
+    }
+    return dot(ng, l) > 0.0 && dot(n, l) > 0.0;
+}
+
+vec3 rb_hybrid_env(vec3 d)
+{
+    vec3 env = g.env_color.rgb;
+    if (g.env.z > 0.5)
+        env = textureLod(env_map, rb_equirect_uv(d, g.env.y), 0.0).rgb;
+    return env * g.env.x;
+}
+
+// The light a surface point sends toward v, but its emission: the punctual lights' direct light
+// through the shadow maps. (Shading at a hit, screen or BVH alike.)
+vec3 rb_hybrid_shade(vec3 p, vec3 n, vec3 ng, vec3 v, vec3 c_diff, vec3 f0, float f90,
+                     float roughness)
+{
+    return rb_punctual_light(vec3(0.0), p, n, ng, v, c_diff, f0, f90, roughness);
+}
+
+// Where the pixel's surface was in the previous frame (its motion vector), or (-1, -1) when it
+// was not there: off screen, or the previous frame saw another surface there (depth or normal
+// too different: a disocclusion).
+ivec2 rb_hybrid_reproject(ivec2 px, float depth, vec3 n)
+{
+    vec2 m = imageLoad(gb_motion, px).xy;
+    ivec2 q = ivec2(floor(vec2(px) + 0.5 + m));
+    if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(g.size.xy))))
+        return ivec2(-1);
+    vec4 geo = imageLoad(acc_prev, ivec3(q, RB_HYBRID_ACC_GEOMETRY));
+    if (!(geo.w > 0.0) || abs(geo.w - depth) > pc.params.z * 2.0 * depth ||
+        dot(geo.xyz, n) < pc.params.w)
+        return ivec2(-1);
+    return q;
+}
+
+#endif

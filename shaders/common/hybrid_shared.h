@@ -1,0 +1,73 @@
+/* The hybrid integrator's buffers and push constants, shared by C (lib/passes/hybrid.c,
+ * lib/integrators/hybrid.c) and GLSL (shaders/hybrid_*.comp); C checks each size with
+ * _Static_assert in lib/passes/passes.h. DESIGN.md "hybrid" and man/raybundle-job.5 say what
+ * the passes do. */
+#ifndef RB_SHADERS_HYBRID_SHARED_H
+#define RB_SHADERS_HYBRID_SHARED_H
+
+#include "shared.h"
+
+/* The two lobes a pixel samples separately, each with its own rays, counts and filter. */
+#define RB_HYBRID_DIFFUSE 0u
+#define RB_HYBRID_SPECULAR 1u
+
+/* A ray slot's state (the w of its first vec4). A slot is (lobe, ray, pixel): slot index
+ * ((lobe * rays + ray) * height + y) * width + x, so every ray has one place whatever order
+ * the passes find it in. */
+#define RB_HYBRID_NONE 0u    /* not requested */
+#define RB_HYBRID_SCREEN 1u  /* hit in screen space, shaded */
+#define RB_HYBRID_QUEUED 2u  /* left the screen or passed behind unknown depth: for the BVH */
+#define RB_HYBRID_BVH 3u     /* hit in the BVH, shaded */
+#define RB_HYBRID_MISS 4u    /* hit nothing: the environment */
+#define RB_HYBRID_DROPPED 5u /* queued when the queue was full: not a sample */
+#define RB_HYBRID_ABSORBED 6u /* sampled below the surface: a sample of nothing */
+
+/* One ray slot. While the ray waits for the BVH: a.xyz its origin, b.xyz its direction, c.rgb
+ * the estimator's weight (BRDF x cosine / pdf, untextured as the output pass expects). Once
+ * shaded, what it brings the pixel, weighted, split as the layers are: a.rgb the emission or
+ * environment it found (direct light of the camera vertex), b.rgb the light its hit reflects
+ * (one indirect bounce). */
+struct rb_gpu_hybrid_slot {
+    RB_VEC4(a); /* w: state, float bits of RB_HYBRID_* */
+    RB_VEC4(b);
+    RB_VEC4(c);
+};
+
+/* Layers of an accumulator image: two sets (A, B) of four, then the frame's geometry. Set s's
+ * layer 4s + RB_HYBRID_ACC_*: rgb sums of the lobe's direct and indirect light; w of the direct
+ * layer: samples; w of the indirect layer: sum of the squared luminance of the samples. */
+#define RB_HYBRID_ACC_DIFFUSE_DIRECT 0u
+#define RB_HYBRID_ACC_DIFFUSE_INDIRECT 1u
+#define RB_HYBRID_ACC_SPECULAR_DIRECT 2u
+#define RB_HYBRID_ACC_SPECULAR_INDIRECT 3u
+#define RB_HYBRID_ACC_GEOMETRY 8u /* shading normal xyz, depth (0: no surface) */
+#define RB_HYBRID_ACC_LAYERS 9u
+
+/* Ray counts of a frame (integer atomics: the totals do not depend on the order), then the
+ * BVH pass's indirect dispatch. */
+struct rb_gpu_hybrid_counters {
+    RB_UVEC4(rays);     /* requested, screen hits, queued, BVH hits */
+    RB_UVEC4(more);     /* misses, dropped (queue full), queue length, unused */
+    RB_UVEC4(dispatch); /* x, y, z workgroups of the BVH pass */
+};
+
+/* Workgroup size of the queue's passes and of the BVH pass; the queue scan handles up to
+ * RB_HYBRID_SCAN_BLOCKS blocks of RB_HYBRID_QUEUE_GROUP slots. */
+#define RB_HYBRID_QUEUE_GROUP 256u
+#define RB_HYBRID_BVH_GROUP 64u
+
+/* Side of the noise tiles (seed 003: variance over 16 x 16 tiles). */
+#define RB_HYBRID_TILE 16u
+
+/* Push constants of every hybrid pass: the one layout keeps the record code simple. */
+struct rb_gpu_hybrid_push {
+    RB_UVEC4(frame);   /* frame index, rays a lobe, lobe of this dispatch, slots per lobe */
+    RB_UVEC4(history); /* reset A, reset B (0/1), output set (0: A, 1: B), younger set */
+    RB_UVEC4(sizes);   /* spp aimed for, screen steps, queue capacity, hiz levels */
+    RB_UVEC4(level);   /* hiz: level written, its width, height, offset; queue: phase */
+    RB_UVEC4(more);    /* hiz: offset of the level read, its width, height; filter radius */
+    RB_VEC4(params);   /* noise target, thickness, filter depth stop, filter normal stop */
+    RB_VEC4(scene);    /* scene diagonal, ray offset (fraction of depth), unused, unused */
+};
+
+#endif

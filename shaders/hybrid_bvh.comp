@@ -1,0 +1,58 @@
+// hybrid_bvh: the queued rays through the BVH (seed 003: traverse the BVH later, in a compute
+// shader: the default device has no ray queries). A hit is shaded as a screen hit is: its
+// material at the hit (textures, no normal map), its emission as the camera vertex's direct
+// light, the punctual lights' shadow-mapped light as the bounce; a miss takes the environment.
+// The back of a single-sided surface is an occluder that sends nothing.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 64) in;
+
+#include "hybrid.glsl"
+#include "bvh_shared.h"
+
+layout(std430, binding = RB_BIND_HYBRID_BVH_NODES) readonly buffer BvhNodes { rb_gpu_bvh_node bvh_nodes[]; };
+layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer BvhTris { rb_gpu_bvh_triangle bvh_tris[]; };
+
+#include "bvh.glsl"
+
+void main()
+{
+    uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * RB_HYBRID_BVH_GROUP +
+             gl_LocalInvocationID.x;
+    if (i >= counters.more.z)
+        return;
+    uint slot = queue[i];
+    rb_gpu_hybrid_slot s = slots[slot];
+    vec3 o = s.a.xyz, d = s.b.xyz, weight = s.c.rgb;
+    rb_bvh_hit hit;
+    if (!rb_bvh_intersect(o, d, 0.0, 1e30, hit)) {
+        atomicAdd(counters.more.x, 1u);
+        slots[slot].a = vec4(weight * rb_hybrid_env(d), uintBitsToFloat(RB_HYBRID_MISS));
+        slots[slot].b = vec4(0.0);
+        return;
+    }
+    atomicAdd(counters.rays.w, 1u);
+    uint t = hit.triangle;
+    rb_gpu_vertex v0 = verts[indices[3u * t]], v1 = verts[indices[3u * t + 1u]],
+                  v2 = verts[indices[3u * t + 2u]];
+    vec3 b = vec3(1.0 - hit.bary.x - hit.bary.y, hit.bary);
+    vec3 ng = normalize(cross(v1.position.xyz - v0.position.xyz, v2.position.xyz - v0.position.xyz));
+    vec3 n = normalize(b.x * v0.normal.xyz + b.y * v1.normal.xyz + b.z * v2.normal.xyz);
+    vec2 uv = b.x * v0.uv.xy + b.y * v1.uv.xy + b.z * v2.uv.xy;
+    rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
+    bool front = dot(ng, d) < 0.0;
+    vec3 direct = vec3(0.0), lit = vec3(0.0);
+    if (front || m.specular_color.w > 0.5) {
+        if (!front)
+            ng = -ng;
+        if (dot(n, ng) < 0.0)
+            n = -n;
+        rb_surface sf = rb_material_eval(m, uv, srgb_textures, linear_textures);
+        vec3 p = o + hit.t * d;
+        direct = weight * sf.emission;
+        lit = weight * rb_hybrid_shade(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90, sf.roughness);
+    }
+    slots[slot].a = vec4(direct, uintBitsToFloat(RB_HYBRID_BVH));
+    slots[slot].b = vec4(lit, 0.0);
+}

@@ -1,0 +1,63 @@
+// hybrid_filter: one lobe's light for the output pass, from the older accumulator (the one that
+// spans more frames), through a bilateral filter whose radius shrinks as the pixel's samples
+// grow (seed 003's variable kernel): radius / sqrt(samples), nothing once that is under a pixel.
+// Neighbours weigh by a Gaussian of distance, stop at depth and normal edges, and count by their
+// samples (the filter averages sums over sample counts). The specular lobe's radius also scales
+// with the roughness, so a mirror stays sharp. Writes the samples and the tile mask (the EXR's
+// layers) with the diffuse lobe.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+#include "hybrid.glsl"
+
+void main()
+{
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(uvec2(px), g.size.xy)))
+        return;
+    uint lobe = pc.frame.z;
+    uint layer = 4u * pc.history.z + 2u * lobe;
+    vec4 pos = imageLoad(gb_position, px);
+    vec4 d0 = imageLoad(acc, ivec3(px, layer));
+    vec3 dsum = vec3(0.0), isum = vec3(0.0);
+    float wsum = 0.0;
+    if (pos.w > 0.0) {
+        vec3 n = imageLoad(gb_normal, px).xyz;
+        float radius = float(pc.more.w) / sqrt(max(d0.w, 1.0));
+        if (lobe == RB_HYBRID_SPECULAR)
+            radius *= clamp(2.0 * imageLoad(gb_specular, px).a, 0.0, 1.0);
+        int r = radius < 1.0 ? 0 : int(radius);
+        float inv2s2 = 1.0 / (2.0 * max(radius * 0.5, 0.5) * max(radius * 0.5, 0.5));
+        for (int y = -r; y <= r; y++)
+            for (int x = -r; x <= r; x++) {
+                ivec2 q = px + ivec2(x, y);
+                if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(g.size.xy))))
+                    continue;
+                vec4 pq = imageLoad(gb_position, q);
+                if (!(pq.w > 0.0) || abs(pq.w - pos.w) > pc.params.z * pos.w ||
+                    dot(imageLoad(gb_normal, q).xyz, n) < pc.params.w)
+                    continue;
+                vec4 dq = imageLoad(acc, ivec3(q, layer));
+                vec4 iq = imageLoad(acc, ivec3(q, layer + 1u));
+                float w = exp(-float(x * x + y * y) * inv2s2);
+                dsum += w * dq.rgb;
+                isum += w * iq.rgb;
+                wsum += w * dq.w;
+            }
+    }
+    vec4 dl = vec4(wsum > 0.0 ? dsum / wsum : vec3(0.0), 0.0);
+    vec4 il = vec4(wsum > 0.0 ? isum / wsum : vec3(0.0), 0.0);
+    if (lobe == RB_HYBRID_DIFFUSE) {
+        imageStore(o_direct_diffuse, px, dl);
+        imageStore(o_indirect_diffuse, px, il);
+        uvec2 tiles_n = (g.size.xy + RB_HYBRID_TILE - 1u) / RB_HYBRID_TILE;
+        uvec2 t = uvec2(px) / RB_HYBRID_TILE;
+        vec4 sp = imageLoad(acc, ivec3(px, 4u * pc.history.z + 2u));
+        imageStore(stats, px, vec4(d0.w, sp.w, tiles[t.y * tiles_n.x + t.x], 0.0));
+    } else {
+        imageStore(o_direct_specular, px, dl);
+        imageStore(o_indirect_specular, px, il);
+    }
+}
