@@ -102,11 +102,11 @@ uint desired(uint lobe, vec3 c_diff, vec3 f0, float roughness, float direct_lum,
         float a = rb_lum(c_diff);
         if (a <= 0.0)
             return 0u;
-        w = clamp(2.0 * a, 0.125, 1.0);
+        w = clamp(2.0 * a, 0.5, 1.0);
     } else {
-        w = clamp(4.0 * rb_spec_map(f0), 0.125, 1.0) * clamp(2.0 * roughness, 0.125, 1.0);
+        w = max(clamp(4.0 * rb_spec_map(f0), 0.5, 1.0) * clamp(2.0 * roughness, 0.5, 1.0), 0.5);
     }
-    float masking = clamp(2.0 * est / (est + direct_lum + 1e-6), 0.25, 1.0);
+    float masking = clamp(2.0 * est / (est + direct_lum + 1e-6), 0.5, 1.0);
     return uint(max(ceil(spp * w * masking), 1.0));
 }
 

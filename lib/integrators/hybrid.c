@@ -103,8 +103,8 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
     const struct rb_job_hybrid *s = d->settings;
     struct rb_hybrid_frame *h = &d->h;
     uint32_t w = it->frame.width_px, ht = it->frame.height_px;
-    const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
-                                       VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    const VkBufferUsageFlags storage =
+        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     uint64_t cells = 0;
     h->hiz_levels = 0;
     for (uint32_t lw = w, lh = ht;; lw = (lw + 1) / 2, lh = (lh + 1) / 2) {
@@ -125,8 +125,8 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
     enum rb_status st;
     if ((st = rb_gpu_check_buffer_size(gpu, "hybrid", "ray slots",
                                        h->slot_count * sizeof(struct rb_gpu_hybrid_slot), err)) ||
-        (st = rb_frame_buffer(gpu, cells * 2 * sizeof(float), storage, false, "hybrid.hiz",
-                              &h->hiz, err)) ||
+        (st = rb_frame_buffer(gpu, cells * 2 * sizeof(float), storage, false, "hybrid.hiz", &h->hiz,
+                              err)) ||
         (st = rb_frame_buffer(gpu, h->slot_count * sizeof(struct rb_gpu_hybrid_slot), storage,
                               false, "hybrid.slots", &h->slots, err)) ||
         (st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_hybrid_counters),
@@ -214,13 +214,13 @@ static enum rb_status build_bvh(struct rb_integrator *it, struct hybrid *d, int6
                                      .indices = d->indices,
                                      .triangle_count = d->triangle_count};
     struct rb_bvh bvh = {0};
-    enum rb_status st = rb_bvh_build(&(struct rb_bvh_desc){.mesh = &mesh,
-                                                           .objects = d->objects,
-                                                           .object_count = d->object_count,
-                                                           .triangle_budget =
-                                                               d->settings->bvh_triangles,
-                                                           .thread_count = 0},
-                                     &bvh, err);
+    enum rb_status st =
+        rb_bvh_build(&(struct rb_bvh_desc){.mesh = &mesh,
+                                           .objects = d->objects,
+                                           .object_count = d->object_count,
+                                           .triangle_budget = d->settings->bvh_triangles,
+                                           .thread_count = 0},
+                     &bvh, err);
     if (st) {
         rb_err_prefix(err, "hybrid: the BVH of frame %lld", (long long)epoch);
         return st;

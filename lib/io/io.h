@@ -160,7 +160,7 @@ struct rb_io_timing {
     /* bdpt's ray-bundle node buffer, written when capacity > 0: the most nodes one bundle
      * asked for, the capacity, the fragments dropped (overflow: dropped > 0) */
     uint32_t bundle_nodes_max, bundle_nodes_capacity, bundle_nodes_dropped;
-    const struct rb_io_hits *hits; /* the hit-ratio image's summary; NULL: none written */
+    const struct rb_io_hits *hits;          /* the hit-ratio image's summary; NULL: none written */
     const struct rb_ray_counts *ray_counts; /* the hybrid integrator's rays; NULL: none */
 };
 

@@ -167,15 +167,15 @@ struct rb_job {
             enum rb_bdpt_samples samples;
         } bdpt;
         struct rb_job_hybrid {
-            uint32_t rays;          /* rays a lobe per pixel and frame, default 1 */
-            uint32_t spp;           /* samples a lobe a pixel aims for, default 64 */
-            uint32_t history;       /* W: frames an accumulator spans, default 32 */
-            float noise;            /* tile noise target (relative error), default 0.02 */
-            float thickness;        /* screen hit depth tolerance, relative, default 0.03 */
-            uint32_t screen_steps;  /* most hierarchical depth steps a ray, default 96 */
-            uint32_t bvh_triangles; /* BVH triangle budget, default 2000000 */
-            uint32_t bvh_interval;  /* frames between BVH builds, default 1 */
-            uint32_t queue_rays;    /* BVH queue capacity; 0: every ray of a frame */
+            uint32_t rays;             /* rays a lobe per pixel and frame, default 1 */
+            uint32_t spp;              /* samples a lobe a pixel aims for, default 64 */
+            uint32_t history;          /* W: frames an accumulator spans, default 32 */
+            float noise;               /* tile noise target (relative error), default 0.02 */
+            float thickness;           /* screen hit depth tolerance, relative, default 0.03 */
+            uint32_t screen_steps;     /* most hierarchical depth steps a ray, default 96 */
+            uint32_t bvh_triangles;    /* BVH triangle budget, default 2000000 */
+            uint32_t bvh_interval;     /* frames between BVH builds, default 1 */
+            uint32_t queue_rays;       /* BVH queue capacity; 0: every ray of a frame */
             uint32_t filter_radius_px; /* the filter's radius at one sample, default 6 */
             float filter_depth;        /* relative depth difference that stops it, 0.05 */
             float filter_normal;       /* cosine between normals below which it stops, 0.9 */

@@ -55,14 +55,14 @@ static const struct rb_pass_binding bindings[] = {
 _Static_assert(COUNT(bindings) == RB_BIND_HYBRID_COUNT, "hybrid bindings");
 
 #define COMPUTE(field, spv_name)                                                                   \
-    rb_pass_compute_init(gpu,                                                                      \
-                         &(struct rb_pass_compute_desc){                                           \
-                             .name = "hybrid_" #field,                                             \
-                             RB_PASS_BINDINGS(bindings),                                           \
-                             .push_bytes = sizeof(struct rb_gpu_hybrid_push),                      \
-                             .spv = (spv_name),                                                    \
-                             .spv_bytes = sizeof(spv_name)},                                       \
-                         &p->field, err)
+    rb_pass_compute_init(                                                                          \
+        gpu,                                                                                       \
+        &(struct rb_pass_compute_desc){.name = "hybrid_" #field,                                   \
+                                       RB_PASS_BINDINGS(bindings),                                 \
+                                       .push_bytes = sizeof(struct rb_gpu_hybrid_push),            \
+                                       .spv = (spv_name),                                          \
+                                       .spv_bytes = sizeof(spv_name)},                             \
+        &p->field, err)
 
 enum rb_status rb_pass_hybrid_create(struct rb_gpu *gpu, struct rb_pass_hybrid **out,
                                      struct rb_err *err)
@@ -139,19 +139,18 @@ static void bind(struct rb_pass *pass, VkCommandBuffer cmd, const struct rb_fram
     for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
         rb_pass_bind_image(&b, RB_BIND_HYBRID_LIGHT + i, h->light[i].view, VK_NULL_HANDLE);
     rb_pass_record_bindings(cmd, &b);
-    vkCmdPushConstants(cmd, pass->layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0,
-                       sizeof(h->push), &h->push);
+    vkCmdPushConstants(cmd, pass->layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0, sizeof(h->push),
+                       &h->push);
 }
 
 /* Compute writes before compute reads and writes, inside one pass. */
 static void compute_to_compute(VkCommandBuffer cmd)
 {
-    rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                          VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                          VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
-                          VK_ACCESS_2_SHADER_STORAGE_READ_BIT |
-                              VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
-                              VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT);
+    rb_gpu_memory_barrier(
+        cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT,
+        VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
+            VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT);
 }
 
 static uint32_t groups(uint32_t n, uint32_t size)
@@ -196,8 +195,8 @@ void rb_pass_hybrid_trace_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
                               VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
                               VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
         vkCmdFillBuffer(cmd, h->counters.buffer, 0, VK_WHOLE_SIZE, 0);
-        rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
-                              VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+        rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                              VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                               VK_ACCESS_2_SHADER_STORAGE_READ_BIT |
                                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
     }
@@ -210,8 +209,8 @@ void rb_pass_hybrid_queue_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
                                  const struct rb_frame *frame, const struct rb_frame_slot *slot,
                                  struct rb_hybrid_frame *h)
 {
-    uint32_t blocks = (uint32_t)((h->slot_count + RB_HYBRID_QUEUE_GROUP - 1) /
-                                 RB_HYBRID_QUEUE_GROUP);
+    uint32_t blocks =
+        (uint32_t)((h->slot_count + RB_HYBRID_QUEUE_GROUP - 1) / RB_HYBRID_QUEUE_GROUP);
     uint32_t gx = blocks < 65535 ? blocks : 65535, gy = groups(blocks, 65535);
     for (uint32_t phase = 0; phase < 3; phase++) {
         if (phase)

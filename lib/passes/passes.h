@@ -414,16 +414,16 @@ void rb_pass_bdpt_reconstruct_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd
 struct rb_hybrid_frame {
     struct rb_gpu_hybrid_push push; /* the frame's settings; each record sets its own fields */
     uint32_t hiz_levels;
-    uint64_t slot_count; /* every lobe's */
+    uint64_t slot_count;           /* every lobe's */
     struct rb_gpu_buffer hiz;      /* vec2 per cell of every level */
     struct rb_gpu_buffer slots;    /* struct rb_gpu_hybrid_slot [slot_count] */
     struct rb_gpu_buffer counters; /* struct rb_gpu_hybrid_counters, host-visible */
     struct rb_gpu_buffer queue;    /* uint [queue capacity] */
     struct rb_gpu_buffer blocks;   /* uint per block of slots */
     struct rb_gpu_buffer bvh_nodes, bvh_tris;
-    struct rb_gpu_buffer tiles;            /* float [2 x tiles] */
-    struct rb_gpu_image acc[2];            /* RB_HYBRID_ACC_LAYERS layers; frame f writes f mod 2 */
-    struct rb_gpu_image stats;             /* samples (diffuse, specular), tile mask */
+    struct rb_gpu_buffer tiles; /* float [2 x tiles] */
+    struct rb_gpu_image acc[2]; /* RB_HYBRID_ACC_LAYERS layers; frame f writes f mod 2 */
+    struct rb_gpu_image stats;  /* samples (diffuse, specular), tile mask */
     struct rb_gpu_image light[RB_BDPT_LIGHT_COUNT]; /* what the output pass textures */
     uint32_t cur;                                   /* the accumulator written: frame mod 2 */
 };

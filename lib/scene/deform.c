@@ -1,7 +1,8 @@
 /* CPU deformation: shaders/animate.comp transcribed, so the reference traces (and the hybrid
- * integrator's BVH holds) the vertices the rasterizer draws. Morph deltas weighted in; then the weighted joint matrices
- * divided by the weight sum for a skinned vertex, else the node's world matrix; normals through
- * the inverse transpose, tangents through the upper 3x3. Single precision, like the shader. */
+ * integrator's BVH holds) the vertices the rasterizer draws. Morph deltas weighted in; then the
+ * weighted joint matrices divided by the weight sum for a skinned vertex, else the node's world
+ * matrix; normals through the inverse transpose, tangents through the upper 3x3. Single precision,
+ * like the shader. */
 #include "scene/scene.h"
 
 #include <math.h>

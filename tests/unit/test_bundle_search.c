@@ -12,8 +12,8 @@
  *   k bundles: k is the new direction.
  * - Embree casts the line the lists sampled for x1: through its texel's centre (the rasterizer's
  *   sample), along s d, from x1's depth plus half a texel (where the search starts), against the
- *   same posed triangles (rb_scene_deform), keeping the nearest that faces the line's origin, as the
- *   search keeps the nodes that face x1.
+ *   same posed triangles (rb_scene_deform), keeping the nearest that faces the line's origin, as
+ * the search keeps the nodes that face x1.
  * - A sample agrees when both miss, or both hit at distances within one texel of the grid with
  *   interpolated normals within NORMAL_COS (the same surface). For each direction, s = +1
  *   (along d: front nodes) and s = -1 (against d: back nodes), at least 99% of the samples agree.
