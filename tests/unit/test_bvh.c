@@ -472,6 +472,15 @@ static bool world_load(const char *path, struct world *w)
     return true;
 }
 
+static struct rb_bvh_mesh world_mesh(const struct world *w)
+{
+    return (struct rb_bvh_mesh){.positions = w->pos,
+                                .stride_floats = 4,
+                                .vertex_count = w->vertex_count,
+                                .indices = w->tris,
+                                .triangle_count = w->tri_count};
+}
+
 static void world_release(struct world *w)
 {
     free(w->objects);
@@ -630,11 +639,7 @@ static bool compare_scene(const char *name, const char *path)
     struct world w;
     if (!world_load(path, &w))
         return false;
-    struct rb_bvh_mesh m = {.positions = w.pos,
-                            .stride_floats = 4,
-                            .vertex_count = w.vertex_count,
-                            .indices = w.tris,
-                            .triangle_count = w.tri_count};
+    struct rb_bvh_mesh m = world_mesh(&w);
     struct rb_bvh bvh;
     double start = now_s();
     build(&(struct rb_bvh_desc){.mesh = &m, .objects = w.objects, .object_count = w.object_count},
@@ -710,11 +715,7 @@ static void test_threads_scene(void **state)
         skip(); /* a checkout without the external sample scenes */
     }
     assert_true(world_load(path, &w));
-    struct rb_bvh_mesh m = {.positions = w.pos,
-                            .stride_floats = 4,
-                            .vertex_count = w.vertex_count,
-                            .indices = w.tris,
-                            .triangle_count = w.tri_count};
+    struct rb_bvh_mesh m = world_mesh(&w);
     expect_same_build(
         &(struct rb_bvh_desc){.mesh = &m, .objects = w.objects, .object_count = w.object_count},
         "MetalRoughSpheresNoTextures");
