@@ -10,8 +10,8 @@
 # Environment: RB_FARM_SIZE (default 160x90), RB_FARM_FRAMES (0-7), RB_FARM_TASKS (4),
 # RB_FARM_TIMEOUT (seconds for the array job, 300), RB_FARM_PORTS ("CTLD SLURMD", the daemons'
 # ports; by default two that tests/tools/freeport finds free when the cluster starts, chosen
-# again when a daemon finds its port taken after all). The wall times of both renders are printed as
-# "# wall" lines (make bench reads them).
+# again when a daemon finds its port taken after all). The wall times of both renders are
+# printed as "# wall" lines (make bench reads them).
 . tests/integration/lib.sh
 
 size=${RB_FARM_SIZE:-160x90}
