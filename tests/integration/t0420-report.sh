@@ -275,15 +275,22 @@ color() {
 plot() {
     section "$1" | sed -n 's/.* data-plot="\([^"]*\)".*/\1/p'
 }
-for chart in "passes shadow" "frame-time frame wall" "temporal sequence" "warped excess" \
-    "reference-error relMSE"; do
-    id=${chart%% *}
-    series=${chart#* }
-    c=$(color "$id" "$series")
-    set -- $(plot "$id")
-    count=$("$PIXELS" "$T/shot.png" "$1" "$2" "$3" "$4" "$c")
-    check "the '$id' plot is drawn: $count pixels of '$series' ($c)" test "${count:-0}" -ge 60
-done
+# drawn SCREENSHOT CHART...: each CHART ("ID SERIES") has 60 pixels or more of the series'
+# colour in its plot area on the screenshot.
+drawn() {
+    shot=$1
+    shift
+    for chart in "$@"; do
+        id=${chart%% *}
+        series=${chart#* }
+        c=$(color "$id" "$series")
+        area=$(plot "$id" | cut -d' ' -f1-4)
+        count=$("$PIXELS" "$shot" $area "$c")
+        check "the '$id' plot is drawn: $count pixels of '$series' ($c)" test "${count:-0}" -ge 60
+    done
+}
+drawn "$T/shot.png" "passes shadow" "frame-time frame wall" "temporal sequence" "warped excess" \
+    "reference-error relMSE"
 
 # Each frame's largest pass, from its sidecar: the middle of its segment of the stack, mapped
 # through the plot area and axis the page declares, is that pass's colour on the screenshot; the
@@ -328,8 +335,8 @@ check "the hit-ratio chart's legend names its colour ($hc)" test -n "$hc"
 set -- $(plot hit-ratio)
 px=$1 py=$2 pw=$3 ph=$4 pmax=$5 pn=$6
 check "the hit-ratio chart runs from 0 to 1 with a slot a frame" test "$pmax $pn" = "1 6"
-count=$("$PIXELS" "$T/bshot.png" "$px" "$py" "$pw" "$ph" "$hc")
-check "the hit-ratio plot is drawn: $count pixels of its colour" test "${count:-0}" -ge 60
+drawn "$T/bshot.png" "hit-ratio hit ratio" "warped excess" "warped sequence" \
+    "reference-error relMSE"
 for f in 0 1 2 3 4 5; do
     set -- $(awk -v px="$px" -v py="$py" -v pw="$pw" -v ph="$ph" -v max="$pmax" -v n="$pn" \
         -v i="$f" -v v="$(hits_mean $f)" 'BEGIN {
@@ -341,14 +348,6 @@ for f in 0 1 2 3 4 5; do
     below=$("$PIXELS" "$T/bshot.png" "$1" "$4")
     check "8 pixels above and below frame $f's point are not the series' ($above, $below)" \
         test "$above" != "$hc" -a "$below" != "$hc"
-done
-for chart in "warped excess" "warped sequence" "reference-error relMSE"; do
-    id=${chart%% *}
-    series=${chart#* }
-    c=$(color "$id" "$series")
-    set -- $(plot "$id")
-    count=$("$PIXELS" "$T/bshot.png" "$1" "$2" "$3" "$4" "$c")
-    check "the bdpt '$id' plot is drawn: $count pixels of '$series' ($c)" test "${count:-0}" -ge 60
 done
 
 done_testing
