@@ -359,6 +359,16 @@ static void test_sets_compare(void **state)
     assert_int_equal(rb_analysis_timing_sets_match(base, slow, &err), RB_OK);
     assert_int_equal(rb_analysis_timing_sets_match(base, other, &err), RB_E_INVALID);
     assert_non_null(strstr(err.msg, "'0123456789abcdef' and 'fedcba9876543210'"));
+    /* The same job measured with another driver, or on another device: refused, both named. */
+    rb_strlcpy(other->bench.job_hash, base->bench.job_hash, sizeof(other->bench.job_hash));
+    rb_strlcpy(other->bench.driver, "llvmpipe Mesa 24.0.9", sizeof(other->bench.driver));
+    assert_int_equal(rb_analysis_timing_sets_match(base, other, &err), RB_E_INVALID);
+    assert_non_null(strstr(err.msg, "different drivers: 'llvmpipe Mesa 22.3.6' and 'llvmpipe Mesa "
+                                    "24.0.9'"));
+    rb_strlcpy(other->bench.device, "NVIDIA H100", sizeof(other->bench.device));
+    assert_int_equal(rb_analysis_timing_sets_match(base, other, &err), RB_E_INVALID);
+    assert_non_null(strstr(err.msg, "different devices: 'llvmpipe (LLVM 15.0.6, 256 bits)' and "
+                                    "'NVIDIA H100'"));
 
     assert_int_equal(rb_analysis_timing_compare_sets(base, same, &desc, &rows, &n, &err), RB_OK);
     assert_int_equal(n, 4);
