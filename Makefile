@@ -193,10 +193,10 @@ test check: $(BUILD)/raybundle $(BUILD)/mkdemo $(UNIT_BIN) $(TOOL_BIN) $(FUZZ_RE
 
 # jobs/slurm-array.sh on a one-node Slurm cluster this machine starts (root; installs slurm-wlm
 # and munge through scripts/install-deps.sh --farm). Not in `make check`: CI runs it after.
-check-farm: $(BUILD)/raybundle
+check-farm: $(BUILD)/raybundle $(BUILD)/tests/tools/freeport
 	$(Q)BUILD=$(BUILD) tests/run.sh tests/farm/slurm.sh
 
-bench: $(BUILD)/raybundle $(BUILD)/tests/tools/triangles
+bench: $(BUILD)/raybundle $(BUILD)/tests/tools/triangles $(BUILD)/tests/tools/freeport
 	$(Q)BUILD=$(BUILD) tests/bench.sh
 
 # Golden frames for t0130: only for a change meant to change pixels (see tests/golden/update.sh).

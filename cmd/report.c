@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <getopt.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,41 +24,61 @@ static void usage(FILE *f)
                "  --reference DIR   the reference sequence (raybundle reference), frame by frame\n"
                "  -o, --output PATH the page to write\n"
                "  --thumb-width N   thumbnails N pixels wide at most (240)\n"
+               "  --filmstrip N     show at most N frames' thumbnails, evenly spaced, the first\n"
+               "                    and the last among them (24; 0: every frame)\n"
                "  -h, --help        show this help\n"
                "\n"
                "Exit status: 0 written, 1 the page could not be written, 2 bad usage or a\n"
                "sequence that cannot be read or does not match.\n");
 }
 
+/* Parses s as a whole decimal number in min..max into *out. */
+static bool parse_count(const char *s, long min, long max, long *out)
+{
+    char *end = NULL;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (end == s || *end || errno || v < min || v > max)
+        return false;
+    *out = v;
+    return true;
+}
+
 int cmd_report(int argc, char **argv)
 {
-    enum { O_REFERENCE = 256, O_THUMB_WIDTH };
+    enum { O_REFERENCE = 256, O_THUMB_WIDTH, O_FILMSTRIP };
     static const struct option opts[] = {
         {"reference", required_argument, NULL, O_REFERENCE},
         {"output", required_argument, NULL, 'o'},
         {"thumb-width", required_argument, NULL, O_THUMB_WIDTH},
+        {"filmstrip", required_argument, NULL, O_FILMSTRIP},
         {"help", no_argument, NULL, 'h'},
         {0},
     };
     struct rb_analysis_report_desc desc = {0};
     const char *output = NULL;
+    long v;
     int c;
     optind = 1;
     while ((c = getopt_long(argc, argv, "ho:", opts, NULL)) != -1) {
         switch (c) {
         case O_REFERENCE: desc.reference_dir = optarg; break;
         case 'o': output = optarg; break;
-        case O_THUMB_WIDTH: {
-            char *end = NULL;
-            errno = 0;
-            long v = strtol(optarg, &end, 10);
-            if (end == optarg || *end || errno || v < 1 || v > 4096) {
+        case O_THUMB_WIDTH:
+            if (!parse_count(optarg, 1, 4096, &v)) {
                 cmd_error("--thumb-width expects 1..4096 pixels, got '%s'", optarg);
                 return RB_EXIT_USAGE;
             }
             desc.thumb_width_px = (uint32_t)v;
             break;
-        }
+        case O_FILMSTRIP: /* 1 cannot hold both the first and the last frame */
+            if (!parse_count(optarg, 0, 100000, &v) || v == 1) {
+                cmd_error("--filmstrip expects 0 (every frame) or 2..100000 frames, got '%s'",
+                          optarg);
+                return RB_EXIT_USAGE;
+            }
+            desc.filmstrip_max = v ? (size_t)v : SIZE_MAX;
+            break;
         case 'h': usage(stdout); return RB_EXIT_OK;
         default: usage(stderr); return RB_EXIT_USAGE;
         }

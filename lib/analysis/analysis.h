@@ -377,6 +377,7 @@ void rb_analysis_flicker_destroy(struct rb_analysis_flicker *f);
 #define RB_ANALYSIS_REPORT_PLOT_W 640
 #define RB_ANALYSIS_REPORT_PLOT_H 176
 #define RB_ANALYSIS_REPORT_THUMB_WIDTH 240 /* the default thumbnail width */
+#define RB_ANALYSIS_REPORT_FILMSTRIP 24    /* the default most frames in the filmstrip */
 
 /* A value axis from 0 to max, with a label every step. */
 struct rb_analysis_axis {
@@ -403,6 +404,13 @@ double rb_analysis_plot_y(const struct rb_analysis_plot *p, double v);
 /* The width of a bar: 70% of a slot, at least one pixel. */
 double rb_analysis_plot_bar_width(const struct rb_analysis_plot *p);
 
+/* The frames a filmstrip of at most max_count (at least 2) shows out of frame_count: all of
+ * them when there are no more than max_count, otherwise max_count evenly spaced, the first and
+ * the last among them: index k is the nearest to k (frame_count - 1) / (max_count - 1), halves
+ * rounded up, in integers. Writes the indices, ascending, to out (room for max_count) and
+ * returns how many. */
+size_t rb_analysis_filmstrip_pick(size_t frame_count, size_t max_count, size_t *out);
+
 /* One frame of the report. Values not measured are NaN. */
 struct rb_analysis_report_frame {
     int frame;
@@ -415,6 +423,7 @@ struct rb_analysis_report_frame {
     double hit_ratio;               /* the mean of the hit-ratio image's first channel */
     double warped_error, reference_warped_error, excess_error; /* rb_analysis_flicker's */
     char *thumb, *reference_thumb, *hits_thumb; /* data: URIs; NULL when there is none */
+    bool is_in_filmstrip; /* shown in the filmstrip (the thumbnails are made for these only) */
 };
 
 struct rb_analysis_report_desc {
@@ -422,6 +431,9 @@ struct rb_analysis_report_desc {
     const char *reference_dir;            /* REFSEQ, or NULL */
     const struct rb_io_color_desc *color; /* the thumbnails' view transform; NULL: defaults */
     uint32_t thumb_width_px;              /* 0: RB_ANALYSIS_REPORT_THUMB_WIDTH */
+    /* the most frames the filmstrip shows (rb_analysis_filmstrip_pick), at least 2;
+     * 0: RB_ANALYSIS_REPORT_FILMSTRIP; SIZE_MAX: every frame */
+    size_t filmstrip_max;
 };
 
 struct rb_analysis_report {
@@ -430,6 +442,7 @@ struct rb_analysis_report {
     char integrator[64], reference_integrator[64], reference_spp[32]; /* EXR headers; "" */
     uint32_t width_px, height_px;
     uint32_t thumb_width_px; /* the thumbnails' width on the page */
+    size_t filmstrip_count;  /* the frames with is_in_filmstrip */
     char (*pass_names)[32];  /* pass_count passes, in order of first appearance */
     size_t pass_count;
     struct rb_analysis_report_frame *frames; /* seq.frame_count */

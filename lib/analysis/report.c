@@ -8,6 +8,7 @@
  * their place; nothing is made up. */
 #include "analysis/analysis.h"
 
+#include <assert.h>
 #include <dirent.h>
 #include <errno.h>
 #include <math.h>
@@ -249,6 +250,23 @@ double rb_analysis_plot_bar_width(const struct rb_analysis_plot *p)
     return w < 1.0 ? 1.0 : w;
 }
 
+/* ---- the filmstrip ------------------------------------------------------------------------ */
+
+size_t rb_analysis_filmstrip_pick(size_t frame_count, size_t max_count, size_t *out)
+{
+    assert(max_count >= 2);
+    if (frame_count <= max_count) {
+        for (size_t i = 0; i < frame_count; i++)
+            out[i] = i;
+        return frame_count;
+    }
+    /* frame_count - 1 > max_count - 1, so the steps are more than one apart: no index twice. */
+    size_t span = frame_count - 1, steps = max_count - 1;
+    for (size_t k = 0; k < max_count; k++)
+        out[k] = (k * span + steps / 2) / steps;
+    return max_count;
+}
+
 /* ---- reading a sequence ------------------------------------------------------------------- */
 
 void rb_analysis_report_destroy(struct rb_analysis_report *r)
@@ -414,8 +432,9 @@ static enum rb_status read_hits(const struct rb_analysis_report_desc *desc,
         }
     }
     f->hit_ratio = finite ? sum / (double)finite : NAN;
-    st = thumbnail(desc, img.width_px, img.height_px, img.pixels, img.channel_count, true,
-                   &f->hits_thumb, err);
+    if (f->is_in_filmstrip)
+        st = thumbnail(desc, img.width_px, img.height_px, img.pixels, img.channel_count, true,
+                       &f->hits_thumb, err);
     if (st)
         rb_err_prefix(err, "'%s'", path);
     rb_io_image_release(&img);
@@ -461,6 +480,8 @@ static enum rb_status read_reference(const struct rb_analysis_report_desc *desc,
                          sizeof(r->reference_integrator));
         rb_io_image_attr(path, "raybundle:spp", r->reference_spp, sizeof(r->reference_spp));
     }
+    if (!f->is_in_filmstrip)
+        return RB_OK;
     return thumbnail(desc, ref->width_px, ref->height_px, ref->rgb, 3, false, &f->reference_thumb,
                      err);
 }
@@ -490,8 +511,8 @@ static enum rb_status read_frames(const struct rb_analysis_report_desc *desc,
                 break;
             f->temporal_rmse = m.rmse;
         }
-        if ((st =
-                 thumbnail(desc, cur.width_px, cur.height_px, cur.rgb, 3, false, &f->thumb, err))) {
+        if (f->is_in_filmstrip && (st = thumbnail(desc, cur.width_px, cur.height_px, cur.rgb, 3,
+                                                  false, &f->thumb, err))) {
             rb_err_prefix(err, "'%s'", path);
             break;
         }
@@ -539,11 +560,33 @@ static enum rb_status read_flicker(const struct rb_analysis_report_desc *desc,
     return RB_OK;
 }
 
+/* Marks the frames the filmstrip shows. */
+static enum rb_status pick_filmstrip(const struct rb_analysis_report_desc *desc,
+                                     struct rb_analysis_report *r, struct rb_err *err)
+{
+    size_t n = r->seq.frame_count,
+           max = desc->filmstrip_max ? desc->filmstrip_max : RB_ANALYSIS_REPORT_FILMSTRIP;
+    if (max > n)
+        max = n < 2 ? 2 : n;
+    size_t *picked = malloc(max * sizeof(*picked));
+    if (!picked)
+        return rb_errf(err, RB_E_NOMEM, "report: out of memory for %zu frames", n);
+    r->filmstrip_count = rb_analysis_filmstrip_pick(n, max, picked);
+    for (size_t k = 0; k < r->filmstrip_count; k++)
+        r->frames[picked[k]].is_in_filmstrip = true;
+    free(picked);
+    return RB_OK;
+}
+
 enum rb_status rb_analysis_report_create(const struct rb_analysis_report_desc *desc,
                                          struct rb_analysis_report **out, struct rb_err *err)
 {
     if (!desc || !desc->dir || !*desc->dir)
         return rb_errf(err, RB_E_INVALID, "report: no sequence directory");
+    if (desc->filmstrip_max == 1)
+        return rb_errf(err, RB_E_INVALID,
+                       "report: a filmstrip of 1 frame cannot show the first "
+                       "and the last");
     struct rb_analysis_report *r = calloc(1, sizeof(*r));
     if (!r)
         return rb_errf(err, RB_E_NOMEM, "report: out of memory");
@@ -569,6 +612,8 @@ enum rb_status rb_analysis_report_create(const struct rb_analysis_report_desc *d
             .reference_warped_error = NAN,
             .excess_error = NAN,
         };
+    if ((st = pick_filmstrip(desc, r, err)))
+        goto fail;
     if ((st = read_frames(desc, r, err)) || (st = read_flicker(desc, r, err)))
         goto fail;
     *out = r;
@@ -892,12 +937,19 @@ static void filmstrip(FILE *f, const struct rb_analysis_report *r, int chart)
             "<section id=\"filmstrip\" style=\"top:%gpx\">\n<h2>Frames, display-referred "
             "through the OpenColorIO view%s</h2>\n",
             section_top(chart), r->has_hits ? ", and their hit ratios (black 0, white 1)" : "");
+    if (r->filmstrip_count < r->seq.frame_count)
+        fprintf(f,
+                "<p class=\"stride\">%zu of the %zu frames, evenly spaced, the first and the "
+                "last among them (raybundle report --filmstrip N).</p>\n",
+                r->filmstrip_count, r->seq.frame_count);
     if (!r->has_hits)
         fputs("<p>No hit-ratio images (NAME.####.hits.exr) in this sequence.</p>\n", f);
     fprintf(f, "<table>\n<tr><th>frame</th><th>sequence</th>%s%s</tr>\n",
             r->has_reference ? "<th>reference</th>" : "", r->has_hits ? "<th>hit ratio</th>" : "");
     for (size_t i = 0; i < r->seq.frame_count; i++) {
         const struct rb_analysis_report_frame *fr = &r->frames[i];
+        if (!fr->is_in_filmstrip)
+            continue;
         fprintf(f, "<tr><td>%d", fr->frame);
         if (r->has_reference)
             fprintf(f, "<br>relMSE %s", num(buf, sizeof(buf), fr->relmse));

@@ -323,6 +323,12 @@ static enum rb_status load_run(struct rb_analysis_timing_set *s, uint32_t r, con
                          path, t.device, t.driver, b->device, b->driver);
             break;
         }
+        if (*t.job_hash && strcmp(t.job_hash, b->job_hash) != 0) {
+            st =
+                rb_errf(err, RB_E_INVALID, "'%s': rendered from job %s, and bench.json says job %s",
+                        path, t.job_hash, b->job_hash);
+            break;
+        }
         for (size_t p = 0; p <= t.pass_count; p++) {
             const char *name = p < t.pass_count ? t.passes[p].name : RB_ANALYSIS_WALL;
             double ms = p < t.pass_count ? t.passes[p].gpu_ms + t.passes[p].cpu_ms : t.wall_ms;

@@ -986,6 +986,10 @@ enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t
     json_string(&t, tm->device);
     text_puts(&t, ",\n  \"driver\": ");
     json_string(&t, tm->driver);
+    if (tm->job_hash) {
+        text_puts(&t, ",\n  \"job_hash\": ");
+        json_string(&t, tm->job_hash);
+    }
     text_puts(&t, ",\n  \"integrator\": ");
     json_string(&t, tm->integrator);
     text_printf(&t, ",\n  \"width\": %u,\n  \"height\": %u", tm->width_px, tm->height_px);

@@ -151,6 +151,7 @@ struct rb_io_timing {
     double wall_ms;
     const char *device;
     const char *driver;
+    const char *job_hash; /* 16 hex digits, as the EXR's raybundle:jobHash; NULL: not written */
     const char *integrator;
     uint32_t width_px, height_px;
     uint32_t spp;       /* samples per pixel reached (the reference); written when > 0 */
@@ -167,7 +168,8 @@ struct rb_io_timing {
 /* Writes NAME.####.timing.json atomically:
  * {"frame": 12, "time_s": 0.5, "passes": [{"name": "gbuffer", "gpu_ms": 1.25, "count": 1}, ...],
  * (cpu_ms too where it is > 0)
- *  "wall_ms": 40.1, "device": "...", "driver": "...", ..., "nonfinite": 0}, and for bdpt
+ *  "wall_ms": 40.1, "device": "...", "driver": "...", "job_hash": "0123456789abcdef" (when
+ *  given), ..., "nonfinite": 0}, and for bdpt
  *  "bundle_nodes": {"max": 5120, "capacity": 1048576, "dropped": 0, "overflow": false}, and
  *  with hits "hits": {"mean": 0.97, "p5": 0.75, "p50": 1, "p95": 1}, and with ray counts
  *  "ray_counts": {"requested": 1000, "screen_hits": 700, "queued": 290, "bvh_hits": 250,
@@ -184,6 +186,7 @@ struct rb_io_timing_file {
     size_t pass_count;
     double wall_ms;
     char device[256], driver[256];
+    char job_hash[17];      /* "job_hash" ("" in a sidecar without one) */
     bool has_hits;          /* the sidecar has a "hits" object */
     struct rb_io_hits hits; /* its numbers (NaN for null) when it has */
 };

@@ -161,6 +161,9 @@ static enum rb_status timing_load(const char *path, const char *text, size_t siz
         (st = get_number(root, "", "wall_ms", &out->wall_ms, path, err)) ||
         (st = get_string(root, "", "device", out->device, sizeof(out->device), path, err)) ||
         (st = get_string(root, "", "driver", out->driver, sizeof(out->driver), path, err)) ||
+        (json_object_get(root, "job_hash") &&
+         (st =
+              get_string(root, "", "job_hash", out->job_hash, sizeof(out->job_hash), path, err))) ||
         (st = read_hits(root, out, path, err)))
         goto out;
     out->frame = (int)frame;

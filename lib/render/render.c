@@ -361,6 +361,7 @@ static enum rb_status write_timing(const struct rb_render *r, const char *exr_pa
         .wall_ms = wall_ms,
         .device = r->device,
         .driver = r->driver,
+        .job_hash = r->hash,
         .integrator = rb_integrator_name(r->job->integrator.name),
         .width_px = f->width_px,
         .height_px = f->height_px,

@@ -8,16 +8,17 @@
 # none of them (nor a job step) is left.
 #
 # Environment: RB_FARM_SIZE (default 160x90), RB_FARM_FRAMES (0-7), RB_FARM_TASKS (4),
-# RB_FARM_TIMEOUT (seconds for the array job, 300), RB_FARM_PORT (slurmctld's port; slurmd takes
-# the next; default from this process's id). The wall times of both renders are printed as
-# "# wall" lines (make bench reads them).
+# RB_FARM_TIMEOUT (seconds for the array job, 300), RB_FARM_PORTS ("CTLD SLURMD", the daemons'
+# ports; by default two that tests/tools/freeport finds free when the cluster starts, chosen
+# again when a daemon finds its port taken after all). The wall times of both renders are
+# printed as "# wall" lines (make bench reads them).
 . tests/integration/lib.sh
 
 size=${RB_FARM_SIZE:-160x90}
 frames=${RB_FARM_FRAMES:-0-7}
 tasks=${RB_FARM_TASKS:-4}
 limit=${RB_FARM_TIMEOUT:-300}
-port=${RB_FARM_PORT:-$((20000 + $$ % 20000))}
+FREEPORT="$BUILD/tests/tools/freeport"
 
 if [ "$(id -u)" != 0 ]; then
     skip "a Slurm array job renders the demo" "the cluster's daemons run as root; run as root"
@@ -118,13 +119,16 @@ host=$(uname -n | cut -d. -f1)
 cpus=$(nproc)
 mem_mb=$(($(sed -n 's/^MemTotal: *\([0-9]*\) kB/\1/p' /proc/meminfo) / 1024 / 2))
 export SLURM_CONF="$D/slurm.conf"
-# SlurmctldHost names this machine (slurmctld refuses to run on a host the file does not name)
-# at 127.0.0.1; no cgroups (containers rarely delegate them), no accounting.
-cat >"$SLURM_CONF" <<EOF
+
+# configure CTLD_PORT SLURMD_PORT: writes slurm.conf. SlurmctldHost names this machine
+# (slurmctld refuses to run on a host the file does not name) at 127.0.0.1; no cgroups
+# (containers rarely delegate them), no accounting.
+configure() {
+    cat >"$SLURM_CONF" <<EOF
 ClusterName=raybundle
 SlurmctldHost=$host(127.0.0.1)
-SlurmctldPort=$port
-SlurmdPort=$((port + 1))
+SlurmctldPort=$1
+SlurmdPort=$2
 SlurmUser=root
 SlurmdUser=root
 AuthType=auth/munge
@@ -149,6 +153,7 @@ ReturnToService=2
 NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus RealMemory=$mem_mb State=UNKNOWN
 PartitionName=debug Nodes=$host Default=YES MaxTime=INFINITE State=UP
 EOF
+}
 
 # munged with its own key, socket, seed, log and PID file.
 dd if=/dev/urandom of="$D/munge.key" bs=1024 count=1 2>/dev/null
@@ -160,14 +165,40 @@ if ! wait_for 20 test -S "$D/munge.sock"; then
     fail_all "munged starts"
 fi
 ok "munged starts"
-start slurmctld slurmctld -D -f "$SLURM_CONF"
-start slurmd slurmd -D -f "$SLURM_CONF"
+
+# The daemons' ports: free when freeport chose them, but another program may bind one before
+# its daemon does. A daemon that finds its port taken says so in its log and exits; then the
+# other is stopped too (by PID, TERM then KILL) and both start again on new ports, three tries
+# in all.
 idle() { sinfo -h -n "$host" -o %T | grep -qx idle; }
-if ! wait_for 60 idle; then
-    logs
-    fail_all "the node $host comes up idle"
-fi
-ok "the node $host comes up idle"
+port_taken() { grep -qi 'address already in use' "$D/slurmctld.log" "$D/slurmd.log" 2>/dev/null; }
+idle_or_taken() { idle || port_taken; }
+munged_pids=$pids
+try=1
+while :; do
+    ports=${RB_FARM_PORTS:-$("$FREEPORT" 2 | tr '\n' ' ')}
+    set -- $ports
+    [ $# -eq 2 ] || fail_all "two free ports for slurmctld and slurmd (${ports:-none found})"
+    configure "$1" "$2"
+    start slurmctld slurmctld -D -f "$SLURM_CONF"
+    start slurmd slurmd -D -f "$SLURM_CONF"
+    wait_for 60 idle_or_taken
+    idle 2>/dev/null && break
+    if ! port_taken || [ -n "${RB_FARM_PORTS:-}" ] || [ $try -ge 3 ]; then
+        logs
+        fail_all "the node $host comes up idle (ports $1 and $2)"
+    fi
+    echo "# ports $1 and $2: one was taken before its daemon bound it; trying new ones"
+    daemons=${pids%"$munged_pids"}
+    pids=$daemons
+    stop
+    pids=$munged_pids
+    rm -rf "$D/slurmctld.log" "$D/slurmd.log" "$D/state"/* "$D/spool"/*
+    try=$((try + 1))
+done
+ok "the node $host comes up idle (slurmctld on port $1, slurmd on port $2)"
+check "slurmctld listens on its port, $1" grep -q "^ *[0-9]*: [0-9A-F]*:$(printf '%04X' "$1") " \
+    /proc/net/tcp
 
 # One process renders the frames; then the array job renders them in chunks.
 t0=$(date +%s.%N)
@@ -175,7 +206,11 @@ rb render jobs/demo.yaml --size "$size" --frames "$frames" --out "$T/single" -q
 t1=$(date +%s.%N)
 expect_exit 0 "one process renders frames $frames at $size"
 
-RB_FARM_CLUSTER="$D" RB_JOB=jobs/demo.yaml RAYBUNDLE="$(pwd)/$RB" \
+case $RB in
+/*) raybundle=$RB ;;
+*) raybundle=$(pwd)/$RB ;;
+esac
+RB_FARM_CLUSTER="$D" RB_JOB=jobs/demo.yaml RAYBUNDLE="$raybundle" \
     RB_ARGS="--size $size --frames $frames --out $T/farm" \
     sbatch --parsable --array=0-$((tasks - 1)) --output="$D/task-%a.log" \
     jobs/slurm-array.sh >"$T/sbatch" 2>&1

@@ -52,6 +52,9 @@ check "bench keeps each run's sidecars" test -f "$T/a/run-01/frame.0000.timing.j
 check "bench writes no images" test -z "$(find "$T/a" -name '*.exr' -o -name '*.png')"
 check "bench.json records 3 runs" grep -q '"runs": 3' "$T/a/bench.json"
 check "bench.json records the job hash" grep -q '"job_hash": "[0-9a-f]\{16\}"' "$T/a/bench.json"
+hash=$(sed -n 's/.*"job_hash": "\([0-9a-f]*\)".*/\1/p' "$T/a/bench.json")
+check "every run's sidecars record bench.json's job hash" test "$(grep -l "\"job_hash\": \"$hash\"" \
+    "$T"/a/run-0[1-3]/frame.000[01].timing.json | wc -l)" -eq 6
 for key in device driver build job integrator width height order frames options; do
     check "bench.json records $key" grep -q "\"$key\": " "$T/a/bench.json"
 done
@@ -83,11 +86,18 @@ else
     skip "--json is JSON with a row a series" "no python3"
 fi
 
-# A set of another job: refused, both hashes named; compared with --force.
+# A set whose bench.json names another job than its sidecars: refused, the sidecar named.
 cp -R "$T/b" "$T/c"
 hash=$(sed -n 's/.*"job_hash": "\([0-9a-f]*\)".*/\1/p' "$T/b/bench.json")
-sed "s/\"job_hash\": \"$hash\"/\"job_hash\": \"00000000deadbeef\"/" "$T/b/bench.json" \
-    >"$T/c/bench.json"
+sed -i "s/\"job_hash\": \"$hash\"/\"job_hash\": \"00000000deadbeef\"/" "$T/c/bench.json"
+rb timing compare --force "$T/a" "$T/c"
+expect_exit 2 "a set whose sidecars are of another job than its bench.json is refused"
+stderr_has "/c/run-01/frame.0000.timing.json': rendered from job $hash, and bench.json says job 00000000deadbeef" \
+    "the sidecar and both hashes are named"
+# A set of another job (every file of it): refused, both hashes named; compared with --force.
+for f in "$T"/c/run-*/*.timing.json; do
+    sed -i "s/\"job_hash\": \"$hash\"/\"job_hash\": \"00000000deadbeef\"/" "$f"
+done
 rb timing compare "$T/a" "$T/c"
 expect_exit 2 "sets of different jobs are refused"
 stderr_has "different job hashes (the job, scene or options differ): '$hash' and '00000000deadbeef'" \

@@ -2,12 +2,13 @@
 # raybundle report: a tiny render of the demo and its reference make a page that holds everything
 # itself (no script, nothing fetched, every image a data: URI) and agrees with raybundle compare;
 # usage errors and sequences that do not match are named; hit-ratio images, where a sequence has
-# them, are plotted and shown. Then, where Debian's chromium runs, the page is loaded headless:
+# them, are plotted and shown: synthetic ones, and a real bdpt sequence's, whose plotted means are
+# its sidecars' hits.mean; --filmstrip N shows N frames evenly spaced. Then, where Debian's chromium runs, the page is loaded headless:
 # a copy with a probe script in its <head> records every error event, console.error and image
 # that did not decode into the DOM that --dump-dom prints (Chromium's own log lines change from
 # release to release; the DOM does not), and a screenshot is checked pixel by pixel: the plots
-# hold their series' colours, and each frame's bar has, at the height the sidecars put its
-# largest pass, that pass's colour.
+# hold their series' colours, each frame's bar has, at the height the sidecars put its largest
+# pass, that pass's colour, and each bdpt frame's hit-ratio point is where its sidecar puts it.
 . tests/integration/lib.sh
 PIXELS="$BUILD/tests/tools/pixels"
 
@@ -132,6 +133,79 @@ rb report "$T/hits" -o "$T/hits2.html"
 expect_exit 2 "a hit-ratio image missing from one frame exits 2"
 stderr_has "'$T/hits/frame.0003.hits.exr' is missing" "the missing hit-ratio image is named"
 
+# ---- a real bdpt sequence: hit ratios, warped and excess error, the filmstrip's stride ------
+
+# bdpt writes NAME.####.hits.exr (channel Y) and the sidecar's "hits" summary; the demo's default
+# layers hold depth and motion, so the warped and excess errors are computed too. 64x36 and six
+# frames (a second of the first cache cycle and the next) keep it to a few seconds.
+rb render jobs/demo.yaml --integrator bdpt --size 64x36 --frames 0-5 --out "$T/bdpt" -q
+expect_exit 0 "render 6 frames of the demo with bdpt"
+rb reference jobs/demo.yaml --size 64x36 --frames 0-5 --spp 4 --out "$T/bref" -q
+expect_exit 0 "render their reference"
+rb report "$T/bdpt" --reference "$T/bref" -o "$T/bdpt.html"
+expect_exit 0 "report of the bdpt sequence exits 0"
+bpage="$T/bdpt.html"
+check "the bdpt report plots the hit ratio" grep -q '<section id="hit-ratio"' "$bpage"
+check "the hit-ratio chart has one point a frame" \
+    test "$(grep -c '<title>frame [0-9]*: hit ratio ' "$bpage")" -eq 6
+# hits_mean F: the "hits" object's mean in frame F's sidecar, as written.
+hits_mean() {
+    sed -n 's/.*"hits": {"mean": \([^,]*\),.*/\1/p' "$T/bdpt/frame.000$1.timing.json"
+}
+for f in 0 1 2 3 4 5; do
+    mean=$(hits_mean $f)
+    want=$(printf '%.4g' "$mean")
+    check "frame $f's plotted hit ratio is its sidecar's hits.mean ($want)" \
+        grep -q "<title>frame $f: hit ratio $want</title>" "$bpage"
+    # The report averages the EXR; OpenImageIO's own average of it is the sidecar's number too.
+    avg=$(oiiotool --stats "$T/bdpt/frame.000$f.hits.exr" | sed -n 's/.*Stats Avg: \([^ ]*\).*/\1/p')
+    check "frame $f's hits.exr averages to its sidecar's mean (oiiotool $avg, sidecar $mean)" \
+        awk -v a="$avg" -v m="$mean" 'BEGIN { d = a - m; exit !(m > 0 && m <= 1 && d * d < 1e-10) }'
+done
+check "the hit ratio rises as the caches fill (frame 3 above frame 0)" \
+    awk -v a="$(hits_mean 0)" -v b="$(hits_mean 3)" 'BEGIN { exit !(b > a) }'
+check "the filmstrip shows a hit-ratio image a frame" \
+    test "$(grep -o 'alt="hit ratio of frame [0-5]"' "$bpage" | wc -l)" -eq 6
+thumb "$bpage" "hit ratio of frame 4"
+check "frame 4's hit-ratio thumbnail is its hits.exr as grey (to 8 bits), not frame 1's" \
+    sh -c "oiiotool --fail 0.0025 --warn 0.0025 '$T/thumb.png' --ch R \
+        '$T/bdpt/frame.0004.hits.exr' --ch Y --diff >/dev/null &&
+    ! oiiotool --fail 0.0025 --warn 0.0025 '$T/thumb.png' --ch R \
+        '$T/bdpt/frame.0001.hits.exr' --ch Y --diff >/dev/null"
+for id in warped reference-error temporal; do
+    check "the bdpt report plots '$id'" grep -q "<section id=\"$id\"" "$bpage"
+done
+rb flicker "$T/bdpt" --reference "$T/bref" --csv
+expect_exit 0 "flicker of the bdpt sequence"
+for f in 1 2 3 4 5; do
+    for col in "2 sequence" "7 excess"; do
+        want=$(awk -F, -v f=$f -v c="${col% *}" '$1 == f { printf "%.4g", $c }' "$T/stdout")
+        check "bdpt frame $f's warped-chart '${col#* }' is flicker's ($want)" \
+            grep -q "<title>frame $f: ${col#* } $want</title>" "$bpage"
+    done
+done
+rb report "$T/bdpt" -o "$T/stride.html" --filmstrip 3
+expect_exit 0 "report --filmstrip 3 exits 0"
+check "--filmstrip 3 shows frames 0, 3 and 5 (2.5 rounds up)" test "$(grep -o \
+    'alt="sequence of frame [0-9]*"' "$T/stride.html" | tr -dc '0-9')" = 035
+check "--filmstrip 3 shows their hit-ratio images alone" test "$(grep -o \
+    'alt="hit ratio of frame [0-9]*"' "$T/stride.html" | tr -dc '0-9')" = 035
+check "--filmstrip 3 says it shows 3 of 6 frames" grep -q '>3 of the 6 frames, evenly spaced' \
+    "$T/stride.html"
+check "--filmstrip 3 still plots every frame" \
+    test "$(grep -c '<title>frame [0-9]*: hit ratio ' "$T/stride.html")" -eq 6
+rb report "$T/bdpt" -o "$T/all.html" --filmstrip 0
+expect_exit 0 "report --filmstrip 0 exits 0"
+check "--filmstrip 0 shows every frame, and says nothing of a stride" sh -c \
+    "test \$(grep -o 'alt=\"sequence of frame' '$T/all.html' | wc -l) -eq 6 &&
+     ! grep -q 'evenly spaced' '$T/all.html'"
+rb report "$T/bdpt" -o "$T/r.html" --filmstrip 1
+expect_exit 2 "--filmstrip 1 exits 2"
+stderr_has "--filmstrip expects 0 (every frame) or 2..100000 frames, got '1'" \
+    "--filmstrip 1 is explained"
+check "raybundle-report(1) documents --filmstrip" grep -q '^\.BI \\-\\-filmstrip ' \
+    man/raybundle-report.1
+
 # ---- in a browser --------------------------------------------------------------------------
 
 # browser ARGS...: headless Chromium with a profile of its own; output in $T/browser.out.
@@ -201,15 +275,22 @@ color() {
 plot() {
     section "$1" | sed -n 's/.* data-plot="\([^"]*\)".*/\1/p'
 }
-for chart in "passes shadow" "frame-time frame wall" "temporal sequence" "warped excess" \
-    "reference-error relMSE"; do
-    id=${chart%% *}
-    series=${chart#* }
-    c=$(color "$id" "$series")
-    set -- $(plot "$id")
-    count=$("$PIXELS" "$T/shot.png" "$1" "$2" "$3" "$4" "$c")
-    check "the '$id' plot is drawn: $count pixels of '$series' ($c)" test "${count:-0}" -ge 60
-done
+# drawn SCREENSHOT CHART...: each CHART ("ID SERIES") has 60 pixels or more of the series'
+# colour in its plot area on the screenshot.
+drawn() {
+    shot=$1
+    shift
+    for chart in "$@"; do
+        id=${chart%% *}
+        series=${chart#* }
+        c=$(color "$id" "$series")
+        area=$(plot "$id" | cut -d' ' -f1-4)
+        count=$("$PIXELS" "$shot" $area "$c")
+        check "the '$id' plot is drawn: $count pixels of '$series' ($c)" test "${count:-0}" -ge 60
+    done
+}
+drawn "$T/shot.png" "passes shadow" "frame-time frame wall" "temporal sequence" "warped excess" \
+    "reference-error relMSE"
 
 # Each frame's largest pass, from its sidecar: the middle of its segment of the stack, mapped
 # through the plot area and axis the page declares, is that pass's colour on the screenshot; the
@@ -240,6 +321,33 @@ for f in 0 1 2 3; do
     below=$("$PIXELS" "$T/shot.png" "$1" "$5")
     check "4 pixels below the top of frame $f's bar, at ($1, $5), is a pass ($below)" \
         test -n "$(section passes | grep "fill=\"#$below\" data-series")"
+done
+
+# The bdpt sequence's page: each frame's hit-ratio point is where its sidecar's hits.mean puts
+# it, through the plot area and axis the page declares: the hit ratio's colour there, and not 8
+# pixels above or below it (the line between points is nearly flat there, a slot being 107
+# pixels wide).
+page=$bpage
+browser --window-size=960,1700 --screenshot="$T/bshot.png" "file://$page"
+check "Chromium takes a screenshot of the bdpt page" test -s "$T/bshot.png"
+hc=$(color hit-ratio "hit ratio")
+check "the hit-ratio chart's legend names its colour ($hc)" test -n "$hc"
+set -- $(plot hit-ratio)
+px=$1 py=$2 pw=$3 ph=$4 pmax=$5 pn=$6
+check "the hit-ratio chart runs from 0 to 1 with a slot a frame" test "$pmax $pn" = "1 6"
+drawn "$T/bshot.png" "hit-ratio hit ratio" "warped excess" "warped sequence" \
+    "reference-error relMSE"
+for f in 0 1 2 3 4 5; do
+    set -- $(awk -v px="$px" -v py="$py" -v pw="$pw" -v ph="$ph" -v max="$pmax" -v n="$pn" \
+        -v i="$f" -v v="$(hits_mean $f)" 'BEGIN {
+            x = int(px + (i + 0.5) * pw / n); y = int(py + ph - v / max * ph)
+            printf "%d %d %d %d\n", x, y, y - 8, y + 8 }')
+    got=$("$PIXELS" "$T/bshot.png" "$1" "$2")
+    check "frame $f's hit-ratio point at ($1, $2) has the series' colour ($got)" test "$got" = "$hc"
+    above=$("$PIXELS" "$T/bshot.png" "$1" "$3")
+    below=$("$PIXELS" "$T/bshot.png" "$1" "$4")
+    check "8 pixels above and below frame $f's point are not the series' ($above, $below)" \
+        test "$above" != "$hc" -a "$below" != "$hc"
 done
 
 done_testing

@@ -119,27 +119,36 @@ static void test_timing_hits(void **state)
     (void)state;
     struct rb_err err = RB_ERR_INIT;
     const struct rb_io_hits hits = {.mean = 99.5 / 256.0, .p5 = 0.03515625, .p50 = 1, .p95 = 1};
-    struct rb_io_timing t = {.frame = 7, .device = "d", .driver = "v", .integrator = "bdpt"};
+    struct rb_io_timing t = {.frame = 7,
+                             .device = "d",
+                             .driver = "v",
+                             .job_hash = "0123456789abcdef",
+                             .integrator = "bdpt"};
     struct rb_io_timing_file back = {0};
     t.hits = &hits;
     assert_int_equal(rb_io_timing_write(tpath("a.timing.json"), &t, &err), RB_OK);
+    assert_non_null(strstr(slurp(tpath("a.timing.json")), "\"job_hash\": \"0123456789abcdef\""));
     assert_non_null(strstr(slurp(tpath("a.timing.json")),
                            "\"hits\": {\"mean\": 0.388671875, \"p5\": 0.03515625, \"p50\": 1, "
                            "\"p95\": 1}"));
     assert_int_equal(rb_io_timing_read(tpath("a.timing.json"), &back, &err), RB_OK);
     assert_true(back.has_hits);
+    assert_string_equal(back.job_hash, "0123456789abcdef");
     assert_double_equal(back.hits.mean, hits.mean, 0.0);
     assert_double_equal(back.hits.p5, hits.p5, 0.0);
     assert_double_equal(back.hits.p50, 1.0, 0.0);
     assert_double_equal(back.hits.p95, 1.0, 0.0);
     rb_io_timing_file_release(&back);
 
-    /* No hit ratios, no object; the reader takes a sidecar without one. */
+    /* No hit ratios, no object; no job hash, no key; the reader takes a sidecar without them. */
     t.hits = NULL;
+    t.job_hash = NULL;
     assert_int_equal(rb_io_timing_write(tpath("b.timing.json"), &t, &err), RB_OK);
     assert_null(strstr(slurp(tpath("b.timing.json")), "hits"));
+    assert_null(strstr(slurp(tpath("b.timing.json")), "job_hash"));
     assert_int_equal(rb_io_timing_read(tpath("b.timing.json"), &back, &err), RB_OK);
     assert_false(back.has_hits);
+    assert_string_equal(back.job_hash, "");
     rb_io_timing_file_release(&back);
 
     /* null (no finite hit ratio) reads as NaN; a malformed object is an error naming it. */

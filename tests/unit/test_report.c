@@ -92,6 +92,36 @@ static void test_plot(void **state)
     assert_double_equal(rb_analysis_plot_bar_width(&p), 1.0, 0.0);
 }
 
+/* The filmstrip's frames against the rule computed in double: every frame up to max_count,
+ * otherwise max_count distinct ascending indices, the first and the last among them, each the
+ * nearest to its k (n - 1) / (max - 1) (ties, which the integers round up, at most half off). */
+static void test_filmstrip_pick(void **state)
+{
+    (void)state;
+    size_t out[64];
+    assert_int_equal(rb_analysis_filmstrip_pick(0, 24, out), 0);
+    assert_int_equal(rb_analysis_filmstrip_pick(1, 2, out), 1);
+    assert_int_equal(out[0], 0);
+    assert_int_equal(rb_analysis_filmstrip_pick(6, 3, out), 3);
+    assert_int_equal(out[0], 0);
+    assert_int_equal(out[1], 3); /* 2.5, rounded up */
+    assert_int_equal(out[2], 5);
+    for (size_t n = 1; n <= 200; n++) {
+        for (size_t max = 2; max <= 64; max++) {
+            size_t count = rb_analysis_filmstrip_pick(n, max, out);
+            assert_int_equal(count, n < max ? n : max);
+            assert_int_equal(out[0], 0);
+            assert_int_equal(out[count - 1], n - 1);
+            for (size_t k = 0; k < count; k++) {
+                if (k > 0)
+                    assert_true(out[k] > out[k - 1]);
+                double want = n <= max ? (double)k : (double)k * (n - 1) / (double)(max - 1);
+                assert_true(fabs((double)out[k] - want) <= 0.5 + 1e-9);
+            }
+        }
+    }
+}
+
 /* ---- sequences ---------------------------------------------------------------------------- */
 
 static const char *tpath(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
@@ -417,9 +447,10 @@ static void test_report_page(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_axis),          cmocka_unit_test(test_plot),
-        cmocka_unit_test(test_scan),          cmocka_unit_test(test_report_numbers),
-        cmocka_unit_test(test_report_errors), cmocka_unit_test(test_report_page),
+        cmocka_unit_test(test_axis),           cmocka_unit_test(test_plot),
+        cmocka_unit_test(test_filmstrip_pick), cmocka_unit_test(test_scan),
+        cmocka_unit_test(test_report_numbers), cmocka_unit_test(test_report_errors),
+        cmocka_unit_test(test_report_page),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

@@ -293,6 +293,7 @@ static void write_set(const char *dir, uint32_t runs, double scale, const char *
                                      .wall_ms = 20.0 * scale + r,
                                      .device = b.device,
                                      .driver = b.driver,
+                                     .job_hash = b.job_hash,
                                      .integrator = "direct",
                                      .width_px = 64,
                                      .height_px = 36};
@@ -358,6 +359,16 @@ static void test_sets_compare(void **state)
     assert_int_equal(rb_analysis_timing_sets_match(base, slow, &err), RB_OK);
     assert_int_equal(rb_analysis_timing_sets_match(base, other, &err), RB_E_INVALID);
     assert_non_null(strstr(err.msg, "'0123456789abcdef' and 'fedcba9876543210'"));
+    /* The same job measured with another driver, or on another device: refused, both named. */
+    rb_strlcpy(other->bench.job_hash, base->bench.job_hash, sizeof(other->bench.job_hash));
+    rb_strlcpy(other->bench.driver, "llvmpipe Mesa 24.0.9", sizeof(other->bench.driver));
+    assert_int_equal(rb_analysis_timing_sets_match(base, other, &err), RB_E_INVALID);
+    assert_non_null(strstr(err.msg, "different drivers: 'llvmpipe Mesa 22.3.6' and 'llvmpipe Mesa "
+                                    "24.0.9'"));
+    rb_strlcpy(other->bench.device, "NVIDIA H100", sizeof(other->bench.device));
+    assert_int_equal(rb_analysis_timing_sets_match(base, other, &err), RB_E_INVALID);
+    assert_non_null(strstr(err.msg, "different devices: 'llvmpipe (LLVM 15.0.6, 256 bits)' and "
+                                    "'NVIDIA H100'"));
 
     assert_int_equal(rb_analysis_timing_compare_sets(base, same, &desc, &rows, &n, &err), RB_OK);
     assert_int_equal(n, 4);
@@ -397,6 +408,20 @@ static void test_set_errors(void **state)
     assert_int_equal(rb_analysis_timing_set_load(dir, &s, &err), RB_E_INVALID);
     assert_null(s);
     assert_non_null(strstr(err.msg, "run-02': no timing sidecar for frame 4"));
+    /* The sidecar of another job (its own job_hash) in the set. */
+    struct rb_pass_time p = {.name = "gbuffer", .gpu_ms = 1.0, .count = 1};
+    struct rb_io_timing t = {.frame = 4,
+                             .passes = &p,
+                             .pass_count = 1,
+                             .wall_ms = 2.0,
+                             .device = "llvmpipe (LLVM 15.0.6, 256 bits)",
+                             .driver = "llvmpipe Mesa 22.3.6",
+                             .job_hash = "00000000deadbeef"};
+    assert_int_equal(rb_io_timing_write(path, &t, &err), RB_OK);
+    assert_int_equal(rb_analysis_timing_set_load(dir, &s, &err), RB_E_INVALID);
+    assert_null(s);
+    assert_non_null(strstr(err.msg, "frame.0004.timing.json': rendered from job 00000000deadbeef, "
+                                    "and bench.json says job 0123456789abcdef"));
     FILE *f = fopen(path, "w");
     assert_non_null(f);
     fputs("{\"frame\": 4,\n \"passes\": [}\n", f);
