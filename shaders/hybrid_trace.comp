@@ -13,6 +13,23 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "hybrid.glsl"
 
+// Where each level of the hierarchical depth buffer starts in it, and its width: filled once by
+// main, before the pixel's rays.
+uint hiz_offset[16];
+uint hiz_width[16];
+
+void hiz_levels()
+{
+    uint off = 0u;
+    uvec2 s = g.size.xy;
+    for (uint i = 0u; i < 16u; i++) {
+        hiz_offset[i] = off;
+        hiz_width[i] = s.x;
+        off += s.x * s.y;
+        s = (s + 1u) / 2u;
+    }
+}
+
 // The ray parameter at which clip-space x / w (axis 0) or y / w (axis 1) reaches ndc.
 float t_at(vec4 c0, vec4 c1, uint axis, float ndc)
 {
@@ -34,18 +51,6 @@ ivec2 screen_trace(vec3 o, vec3 d, float thickness, uint steps)
     float t = 0.0;
     uint level = 0u;
     bool first = true; // the origin's own pixel is skipped
-    uint offsets[16];
-    uvec2 sizes[16];
-    {
-        uint off = 0u;
-        uvec2 s = g.size.xy;
-        for (uint i = 0u; i < 16u; i++) {
-            offsets[i] = off;
-            sizes[i] = s;
-            off += s.x * s.y;
-            s = (s + 1u) / 2u;
-        }
-    }
     for (uint i = 0u; i < steps; i++) {
         vec4 c = c0 + t * c1;
         if (c.w <= 0.0)
@@ -72,7 +77,7 @@ ivec2 screen_trace(vec3 o, vec3 d, float thickness, uint steps)
         }
         float za = c.w, zb = c0.w + t_exit * c1.w;
         float zmin = min(za, zb), zmax = max(za, zb);
-        vec2 cellz = hiz[offsets[level] + uint(cell.y) * sizes[level].x + uint(cell.x)];
+        vec2 cellz = hiz[hiz_offset[level] + uint(cell.y) * hiz_width[level] + uint(cell.x)];
         if (zmax < cellz.x) { // in front of everything in the cell
             t = t_next;
             level = min(level + 1u, levels - 1u);
@@ -166,6 +171,8 @@ void main()
         request = have.w < float(want) && !done;
     }
     float offset = pc.scene.y * pos.w;
+    if (request)
+        hiz_levels();
     for (uint r = 0u; r < rays; r++) {
         uint slot = rb_hybrid_slot(lobe, r, px);
         if (!request) {

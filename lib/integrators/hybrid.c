@@ -29,8 +29,9 @@ struct hybrid {
     struct rb_hybrid_frame h;
     const struct rb_job_hybrid *settings;
     uint32_t queue_capacity;
-    /* the BVH's inputs: the world vertices of a pose and the frame's triangle list */
-    float *positions;
+    /* the BVH's inputs: the world vertices of a pose and the frame's triangle list; built: the
+     * vertices of the BVH on the device */
+    float *positions, *built;
     uint32_t *indices;
     uint32_t triangle_count;
     struct rb_bvh_object *objects;
@@ -68,6 +69,7 @@ static void destroy(struct rb_integrator *it, void *state)
     rb_base_destroy(&d->base);
     rb_scene_pose_destroy(d->bvh_pose);
     free(d->positions);
+    free(d->built);
     free(d->indices);
     free(d->objects);
     free(d);
@@ -81,8 +83,9 @@ static enum rb_status geometry_init(struct rb_integrator *it, struct hybrid *d, 
     uint64_t icount = 0;
     d->indices = rb_frame_world_indices(scene, pose, &icount);
     d->positions = malloc(((size_t)it->frame.vertex_count + 1) * 3 * sizeof(float));
+    d->built = malloc(((size_t)it->frame.vertex_count + 1) * 3 * sizeof(float));
     d->objects = malloc(((size_t)pose->instance_count + 1) * sizeof(*d->objects));
-    if (!d->indices || !d->positions || !d->objects)
+    if (!d->indices || !d->positions || !d->built || !d->objects)
         return rb_errf(err, RB_E_NOMEM, "out of memory for the BVH's %llu triangles",
                        (unsigned long long)(icount / 3));
     d->triangle_count = (uint32_t)(icount / 3);
@@ -208,6 +211,13 @@ static enum rb_status build_bvh(struct rb_integrator *it, struct hybrid *d, int6
 {
     rb_scene_evaluate(it->scene, &it->sel, (double)epoch / it->job->rate_fps, d->bvh_pose);
     rb_scene_deform(it->scene, d->bvh_pose, d->positions, 3, NULL, NULL, NULL);
+    /* The build is a function of the vertices alone (the triangles, objects and budget do not
+     * change): a pose that did not move them keeps the BVH the device has. */
+    size_t bytes = (size_t)it->frame.vertex_count * 3 * sizeof(float);
+    if (d->has_bvh && memcmp(d->positions, d->built, bytes) == 0) {
+        d->bvh_epoch = epoch;
+        return RB_OK;
+    }
     const struct rb_bvh_mesh mesh = {.positions = d->positions,
                                      .stride_floats = 3,
                                      .vertex_count = it->frame.vertex_count,
@@ -242,6 +252,9 @@ static enum rb_status build_bvh(struct rb_integrator *it, struct hybrid *d, int6
                    (unsigned long long)bvh.triangles_left_out, d->settings->bvh_triangles);
         d->bvh_epoch = epoch;
         d->has_bvh = true;
+        float *t = d->built;
+        d->built = d->positions;
+        d->positions = t;
     }
     rb_bvh_release(&bvh);
     return st;
@@ -293,7 +306,7 @@ static void begin(struct rb_integrator *it, struct hybrid *d, VkCommandBuffer cm
     struct rb_hybrid_frame *h = &d->h;
     const struct rb_gpu_image *gb = frame->gbuffer;
     const enum rb_gpu_use rw = RB_GPU_COMPUTE_READ_WRITE, rd = RB_GPU_COMPUTE_READ;
-    struct rb_gpu_access uses[28 + RB_BDPT_LIGHT_COUNT] = {
+    const struct rb_gpu_access uses[] = {
         {.buffer = &frame->globals, .use = RB_GPU_COMPUTE_UNIFORM},
         {.image = &gb[RB_GB_POSITION], .use = rd},
         {.image = &gb[RB_GB_NORMAL], .use = rd},
@@ -322,11 +335,13 @@ static void begin(struct rb_integrator *it, struct hybrid *d, VkCommandBuffer cm
         {.image = &h->acc[h->cur], .use = rw},
         {.buffer = &h->tiles, .use = rw},
         {.image = &h->stats, .use = rw},
+        {.image = &h->light[0], .use = rw},
+        {.image = &h->light[1], .use = rw},
+        {.image = &h->light[2], .use = rw},
+        {.image = &h->light[3], .use = rw},
     };
-    uint32_t count = 28;
-    for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
-        uses[count++] = (struct rb_gpu_access){.image = &h->light[i], .use = rw};
-    rb_integrator_pass_begin(it, cmd, name, uses, count);
+    _Static_assert(RB_BDPT_LIGHT_COUNT == 4, "every light image declared");
+    rb_integrator_pass_begin(it, cmd, name, uses, COUNT(uses));
 }
 
 static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
@@ -335,9 +350,6 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
     struct hybrid *d = state;
     struct rb_base *b = &d->base;
     struct rb_hybrid_frame *h = &d->h;
-    struct rb_pass_hybrid *p = d->passes;
-    const struct rb_frame *frame = &it->frame;
-    const struct rb_frame_slot *slot = ctx->cur;
     d->has_counts = false;
     rb_base_record_animate(it, b->animate, cmd, ctx->cur);
     if (ctx->frame < it->job->sequence_start)
@@ -346,35 +358,15 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
     rb_base_record_shadow(it, b, cmd, ctx);
     rb_base_record_direct_light(it, b, cmd);
     set_push(it, d, ctx->frame);
-    begin(it, d, cmd, ctx, "hiz");
-    rb_pass_hybrid_hiz_record(p, cmd, frame, slot, h);
-    rb_integrator_pass_end(it, cmd);
-    begin(it, d, cmd, ctx, "diffuse_rays");
-    rb_pass_hybrid_trace_record(p, cmd, frame, slot, h, RB_HYBRID_DIFFUSE);
-    rb_integrator_pass_end(it, cmd);
-    begin(it, d, cmd, ctx, "specular_rays");
-    rb_pass_hybrid_trace_record(p, cmd, frame, slot, h, RB_HYBRID_SPECULAR);
-    rb_integrator_pass_end(it, cmd);
-    begin(it, d, cmd, ctx, "ray_queue");
-    rb_pass_hybrid_queue_record(p, cmd, frame, slot, h);
-    rb_integrator_pass_end(it, cmd);
-    begin(it, d, cmd, ctx, "bvh_rays");
-    rb_pass_hybrid_bvh_record(p, cmd, frame, slot, h);
-    rb_integrator_pass_end(it, cmd);
-    begin(it, d, cmd, ctx, "accumulate");
-    rb_pass_hybrid_accumulate_record(p, cmd, frame, slot, h);
-    rb_integrator_pass_end(it, cmd);
-    begin(it, d, cmd, ctx, "tiles");
-    rb_pass_hybrid_tiles_record(p, cmd, frame, slot, h);
-    rb_integrator_pass_end(it, cmd);
+    /* A warm-up records what later frames read: up to the tiles, not the filters. */
+    uint32_t end = ctx->is_warmup ? RB_HYBRID_PASS_TILES + 1 : RB_HYBRID_PASS_COUNT;
+    for (uint32_t which = 0; which < end; which++) {
+        begin(it, d, cmd, ctx, rb_pass_hybrid_names[which]);
+        rb_pass_hybrid_record(d->passes, cmd, &it->frame, ctx->cur, h, which);
+        rb_integrator_pass_end(it, cmd);
+    }
     if (ctx->is_warmup)
         return;
-    begin(it, d, cmd, ctx, "diffuse_filter");
-    rb_pass_hybrid_filter_record(p, cmd, frame, slot, h, RB_HYBRID_DIFFUSE);
-    rb_integrator_pass_end(it, cmd);
-    begin(it, d, cmd, ctx, "specular_filter");
-    rb_pass_hybrid_filter_record(p, cmd, frame, slot, h, RB_HYBRID_SPECULAR);
-    rb_integrator_pass_end(it, cmd);
     rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                           VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
                           VK_ACCESS_2_HOST_READ_BIT);

@@ -158,9 +158,8 @@ static uint32_t groups(uint32_t n, uint32_t size)
     return (n + size - 1) / size;
 }
 
-void rb_pass_hybrid_hiz_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                               const struct rb_frame *frame, const struct rb_frame_slot *slot,
-                               struct rb_hybrid_frame *h)
+static void record_hiz(struct rb_pass_hybrid *p, VkCommandBuffer cmd, const struct rb_frame *frame,
+                       const struct rb_frame_slot *slot, struct rb_hybrid_frame *h)
 {
     uint32_t w = frame->width_px, ht = frame->height_px, offset = 0;
     uint32_t prev_w = 0, prev_h = 0, prev_offset = 0;
@@ -185,9 +184,9 @@ void rb_pass_hybrid_hiz_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
     }
 }
 
-void rb_pass_hybrid_trace_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                                 const struct rb_frame *frame, const struct rb_frame_slot *slot,
-                                 struct rb_hybrid_frame *h, uint32_t lobe)
+static void record_trace(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                         const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                         struct rb_hybrid_frame *h, uint32_t lobe)
 {
     if (lobe == RB_HYBRID_DIFFUSE) {
         /* The counters start at zero, after whatever read them last, before the atomics. */
@@ -205,9 +204,9 @@ void rb_pass_hybrid_trace_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
     vkCmdDispatch(cmd, groups(frame->width_px, 8), groups(frame->height_px, 8), 1);
 }
 
-void rb_pass_hybrid_queue_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                                 const struct rb_frame *frame, const struct rb_frame_slot *slot,
-                                 struct rb_hybrid_frame *h)
+static void record_queue(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                         const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                         struct rb_hybrid_frame *h)
 {
     uint32_t blocks =
         (uint32_t)((h->slot_count + RB_HYBRID_QUEUE_GROUP - 1) / RB_HYBRID_QUEUE_GROUP);
@@ -226,26 +225,25 @@ void rb_pass_hybrid_queue_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
     compute_to_compute(cmd);
 }
 
-void rb_pass_hybrid_bvh_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                               const struct rb_frame *frame, const struct rb_frame_slot *slot,
-                               struct rb_hybrid_frame *h)
+static void record_bvh(struct rb_pass_hybrid *p, VkCommandBuffer cmd, const struct rb_frame *frame,
+                       const struct rb_frame_slot *slot, struct rb_hybrid_frame *h)
 {
     bind(&p->bvh, cmd, frame, slot, h);
     vkCmdDispatchIndirect(cmd, h->counters.buffer,
                           offsetof(struct rb_gpu_hybrid_counters, dispatch));
 }
 
-void rb_pass_hybrid_accumulate_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                                      const struct rb_frame *frame,
-                                      const struct rb_frame_slot *slot, struct rb_hybrid_frame *h)
+static void record_accumulate(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                              const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                              struct rb_hybrid_frame *h)
 {
     bind(&p->accumulate, cmd, frame, slot, h);
     vkCmdDispatch(cmd, groups(frame->width_px, 8), groups(frame->height_px, 8), 1);
 }
 
-void rb_pass_hybrid_tiles_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                                 const struct rb_frame *frame, const struct rb_frame_slot *slot,
-                                 struct rb_hybrid_frame *h)
+static void record_tiles(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                         const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                         struct rb_hybrid_frame *h)
 {
     uint32_t tx = groups(frame->width_px, RB_HYBRID_TILE),
              ty = groups(frame->height_px, RB_HYBRID_TILE);
@@ -258,11 +256,50 @@ void rb_pass_hybrid_tiles_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
     }
 }
 
-void rb_pass_hybrid_filter_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                                  const struct rb_frame *frame, const struct rb_frame_slot *slot,
-                                  struct rb_hybrid_frame *h, uint32_t lobe)
+static void record_filter(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                          const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                          struct rb_hybrid_frame *h, uint32_t lobe)
 {
     h->push.frame[2] = lobe;
     bind(&p->filter, cmd, frame, slot, h);
     vkCmdDispatch(cmd, groups(frame->width_px, 8), groups(frame->height_px, 8), 1);
+}
+
+const char *const rb_pass_hybrid_names[RB_HYBRID_PASS_COUNT] = {
+    [RB_HYBRID_PASS_HIZ] = "hiz",
+    [RB_HYBRID_PASS_DIFFUSE_RAYS] = "diffuse_rays",
+    [RB_HYBRID_PASS_SPECULAR_RAYS] = "specular_rays",
+    [RB_HYBRID_PASS_RAY_QUEUE] = "ray_queue",
+    [RB_HYBRID_PASS_BVH_RAYS] = "bvh_rays",
+    [RB_HYBRID_PASS_ACCUMULATE] = "accumulate",
+    [RB_HYBRID_PASS_TILES] = "tiles",
+    [RB_HYBRID_PASS_DIFFUSE_FILTER] = "diffuse_filter",
+    [RB_HYBRID_PASS_SPECULAR_FILTER] = "specular_filter",
+};
+
+void rb_pass_hybrid_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                           const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                           struct rb_hybrid_frame *h, enum rb_hybrid_pass which)
+{
+    switch (which) {
+    case RB_HYBRID_PASS_HIZ: record_hiz(p, cmd, frame, slot, h); return;
+    case RB_HYBRID_PASS_DIFFUSE_RAYS:
+        record_trace(p, cmd, frame, slot, h, RB_HYBRID_DIFFUSE);
+        return;
+    case RB_HYBRID_PASS_SPECULAR_RAYS:
+        record_trace(p, cmd, frame, slot, h, RB_HYBRID_SPECULAR);
+        return;
+    case RB_HYBRID_PASS_RAY_QUEUE: record_queue(p, cmd, frame, slot, h); return;
+    case RB_HYBRID_PASS_BVH_RAYS: record_bvh(p, cmd, frame, slot, h); return;
+    case RB_HYBRID_PASS_ACCUMULATE: record_accumulate(p, cmd, frame, slot, h); return;
+    case RB_HYBRID_PASS_TILES: record_tiles(p, cmd, frame, slot, h); return;
+    case RB_HYBRID_PASS_DIFFUSE_FILTER:
+        record_filter(p, cmd, frame, slot, h, RB_HYBRID_DIFFUSE);
+        return;
+    case RB_HYBRID_PASS_SPECULAR_FILTER:
+        record_filter(p, cmd, frame, slot, h, RB_HYBRID_SPECULAR);
+        return;
+    case RB_HYBRID_PASS_COUNT: break;
+    }
+    RB_BUG("hybrid pass %d does not exist", (int)which);
 }

@@ -432,32 +432,25 @@ struct rb_pass_hybrid;
 enum rb_status rb_pass_hybrid_create(struct rb_gpu *gpu, struct rb_pass_hybrid **out,
                                      struct rb_err *err);
 void rb_pass_hybrid_destroy(struct rb_pass_hybrid *p);
-/* The hierarchical depth buffer, level by level (barriers between levels are its own). */
-void rb_pass_hybrid_hiz_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                               const struct rb_frame *frame, const struct rb_frame_slot *slot,
-                               struct rb_hybrid_frame *h);
-/* One lobe's rays: requests, screen-space trace, shading of screen hits. Zeroes the counters
- * first for the diffuse lobe. */
-void rb_pass_hybrid_trace_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                                 const struct rb_frame *frame, const struct rb_frame_slot *slot,
-                                 struct rb_hybrid_frame *h, uint32_t lobe);
-/* The queue of rays for the BVH, in slot order (three dispatches, ordered inside). */
-void rb_pass_hybrid_queue_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                                 const struct rb_frame *frame, const struct rb_frame_slot *slot,
-                                 struct rb_hybrid_frame *h);
-/* The queued rays through the BVH (an indirect dispatch the queue wrote). */
-void rb_pass_hybrid_bvh_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                               const struct rb_frame *frame, const struct rb_frame_slot *slot,
-                               struct rb_hybrid_frame *h);
-void rb_pass_hybrid_accumulate_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                                      const struct rb_frame *frame,
-                                      const struct rb_frame_slot *slot, struct rb_hybrid_frame *h);
-/* The tile mask, then its erosion. */
-void rb_pass_hybrid_tiles_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                                 const struct rb_frame *frame, const struct rb_frame_slot *slot,
-                                 struct rb_hybrid_frame *h);
-void rb_pass_hybrid_filter_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
-                                  const struct rb_frame *frame, const struct rb_frame_slot *slot,
-                                  struct rb_hybrid_frame *h, uint32_t lobe);
+/* The hybrid frame's compute passes, in the order they run (lib/integrators/hybrid.c records
+ * the first RB_HYBRID_PASS_TILES + 1 of them in a warm-up). */
+enum rb_hybrid_pass {
+    RB_HYBRID_PASS_HIZ = 0,         /* the hierarchical depth buffer, level by level */
+    RB_HYBRID_PASS_DIFFUSE_RAYS,    /* zeroes the counters; requests, screen trace, screen hits */
+    RB_HYBRID_PASS_SPECULAR_RAYS,   /* the same for the specular lobe */
+    RB_HYBRID_PASS_RAY_QUEUE,       /* the rays for the BVH, in slot order (three dispatches) */
+    RB_HYBRID_PASS_BVH_RAYS,        /* the queued rays through the BVH (indirect dispatch) */
+    RB_HYBRID_PASS_ACCUMULATE,      /* both accumulators */
+    RB_HYBRID_PASS_TILES,           /* the tile mask, then its erosion */
+    RB_HYBRID_PASS_DIFFUSE_FILTER,  /* the diffuse lobe's light for the output pass */
+    RB_HYBRID_PASS_SPECULAR_FILTER, /* the specular lobe's */
+    RB_HYBRID_PASS_COUNT
+};
+/* Each pass's name in the timing sidecars. */
+extern const char *const rb_pass_hybrid_names[RB_HYBRID_PASS_COUNT];
+/* Records pass `which` (barriers between its own dispatches are its own). */
+void rb_pass_hybrid_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                           const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                           struct rb_hybrid_frame *h, enum rb_hybrid_pass which);
 
 #endif
