@@ -1,7 +1,8 @@
 // hybrid_bvh: the queued rays through the BVH (seed 003: traverse the BVH later, in a compute
 // shader: the default device has no ray queries). A hit is shaded as a screen hit is: its
 // material at the hit (textures, no normal map), its emission as the camera vertex's direct
-// light, the punctual lights' shadow-mapped light as the bounce; a miss takes the environment.
+// light, the punctual lights' shadow-mapped light and the triangle's baked light of the
+// emitters and the environment as the bounce; a miss takes the environment.
 // The back of a single-sided surface is an occluder that sends nothing.
 #version 460
 #extension GL_GOOGLE_include_directive : require
@@ -9,12 +10,6 @@
 layout(local_size_x = 64) in;
 
 #include "hybrid.glsl"
-#include "bvh_shared.h"
-
-layout(std430, binding = RB_BIND_HYBRID_BVH_NODES) readonly buffer BvhNodes { rb_gpu_bvh_node bvh_nodes[]; };
-layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer BvhTris { rb_gpu_bvh_triangle bvh_tris[]; };
-
-#include "bvh.glsl"
 
 void main()
 {
@@ -51,7 +46,8 @@ void main()
         rb_surface sf = rb_material_eval(m, uv, srgb_textures, linear_textures);
         vec3 p = o + hit.t * d;
         direct = weight * sf.emission;
-        lit = weight * rb_hybrid_shade(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90, sf.roughness);
+        vec3 baked = rb_hybrid_baked(hit.extra, hit.bary, !front);
+        lit = weight * rb_hybrid_shade(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90, sf.roughness, baked);
     }
     slots[slot].a = vec4(direct, uintBitsToFloat(RB_HYBRID_BVH));
     slots[slot].b = vec4(lit, 0.0);

@@ -3,7 +3,8 @@
 // follows from its albedo, its roughness and how much direct light hides its indirect light)
 // and its tile is not done. Each ray samples the lobe with fixed quasi-random numbers of
 // (frame, pixel, lobe, ray) and marches in screen space through the hierarchical depth buffer:
-// a hit is shaded from the G-buffer where it lands; a ray that leaves the screen, turns toward
+// a hit is shaded from the G-buffer where it lands (with the baked light of the BVH triangle
+// under it); a ray that leaves the screen, turns toward
 // the camera past the near plane, passes behind a surface by more than the thickness, or runs
 // out of steps waits in its slot for the BVH.
 #version 460
@@ -138,6 +139,23 @@ float tile_done(ivec2 px, bool eroded)
     return s;
 }
 
+// check_screen: whether the BVH finds the surface the screen trace hit at pixel `hit` (G-buffer
+// point pq, geometric normal ngq, depth): the ray's closest BVH hit must project to that pixel
+// or one beside it and lie on the plane of the G-buffer's surface there, within the thickness.
+bool bvh_agrees(vec3 o, vec3 l, ivec2 hit, vec3 pq, vec3 ngq, float depth)
+{
+    rb_bvh_hit h;
+    if (!rb_bvh_intersect(o, l, 0.0, 1e30, h))
+        return false;
+    vec3 pb = o + h.t * l;
+    vec4 c = g.view_proj * vec4(pb, 1.0);
+    if (!(c.w > 0.0))
+        return false;
+    vec2 s = (c.xy / c.w * 0.5 + 0.5) * vec2(g.size.xy);
+    return all(lessThanEqual(abs(s - (vec2(hit) + 0.5)), vec2(1.5))) &&
+           abs(dot(pb - pq, ngq)) <= pc.params.y * depth;
+}
+
 void main()
 {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -199,11 +217,17 @@ void main()
             continue;
         }
         atomicAdd(counters.rays.y, 1u);
-        vec3 pq = imageLoad(gb_position, hit).xyz;
+        vec4 pq = imageLoad(gb_position, hit);
         vec4 sq = imageLoad(gb_specular, hit);
         vec4 eq = imageLoad(gb_emission, hit);
-        vec3 lit = rb_hybrid_shade(pq, imageLoad(gb_normal, hit).xyz, ngq, -l,
-                                   imageLoad(gb_albedo, hit).rgb, sq.rgb, eq.w, sq.a);
+        if (pc.scene.w > 0.0) {
+            atomicAdd(counters.check.x, 1u);
+            if (bvh_agrees(o, l, hit, pq.xyz, ngq, pq.w))
+                atomicAdd(counters.check.y, 1u);
+        }
+        vec3 baked = rb_hybrid_baked_at(pq.xyz, ngq, pq.w);
+        vec3 lit = rb_hybrid_shade(pq.xyz, imageLoad(gb_normal, hit).xyz, ngq, -l,
+                                   imageLoad(gb_albedo, hit).rgb, sq.rgb, eq.w, sq.a, baked);
         slots[slot].a = vec4(weight * eq.rgb, uintBitsToFloat(RB_HYBRID_SCREEN));
         slots[slot].b = vec4(weight * lit, 0.0);
     }

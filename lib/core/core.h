@@ -238,6 +238,10 @@ const char *rb_layer_name(enum rb_layer layer);               /* "direct", ... *
  * bvh_hits + misses + dropped. */
 struct rb_ray_counts {
     uint64_t requested, screen_hits, queued, bvh_hits, misses, dropped;
+    /* integrator.hybrid.check_screen: screen hits traced again through the BVH, and those whose
+     * BVH hit is the same surface; has_check false: not checked (and not written) */
+    bool has_check;
+    uint64_t screen_checked, screen_agreed;
 };
 
 struct rb_frame_result {

@@ -47,6 +47,9 @@ enum rb_status rb_integrator_create_with(const struct rb_integrator_desc *desc,
     it->job = desc->job;
     it->scene = desc->scene;
     it->has_env_map = desc->env_rgba != NULL;
+    it->env_rgba = desc->env_rgba;
+    it->env_width_px = desc->env_width_px;
+    it->env_height_px = desc->env_height_px;
     it->cur.setup = &it->setup;
     it->prev.setup = &it->setup;
     it->history_frames = ops->history_frames(desc->job);

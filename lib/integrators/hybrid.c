@@ -14,7 +14,13 @@
  * the W frames before it at most (history_frames = W): a chunk that renders them first as
  * warm-ups gets the bits of a whole run. Warm-ups before the job's first frame record nothing
  * but animate. The BVH is built from the pose of the last frame that is a multiple of
- * bvh_interval after sequence_start, whatever frame the run began at. */
+ * bvh_interval after sequence_start, whatever frame the run began at.
+ *
+ * Baked light (seed 003: "bake direct artificial light"). When the BVH is built, the direct light
+ * of the emissive triangles and the environment is baked at points of its triangles (a lattice
+ * per triangle, finer for longer edges, within integrator.hybrid.bake_texels) by the CPU
+ * reference's light sampling with exact visibility (rb_reference_bake), so a hit, screen or BVH,
+ * reflects it as it reflects the punctual lights: an area-lit room gets its bounce. */
 #include "integrators/integrators_int.h"
 
 #include <math.h>
@@ -22,6 +28,7 @@
 #include <string.h>
 
 #include "bvh/bvh.h"
+#include "reference/reference.h"
 
 struct hybrid {
     struct rb_base base;
@@ -42,6 +49,13 @@ struct hybrid {
     int64_t bvh_epoch; /* the frame whose pose the BVH holds */
     struct rb_ray_counts counts;
     bool has_counts;
+    /* the bake: the reference's world of the scene, NULL when nothing emits; its points, their
+     * light, and how many the device buffer holds */
+    struct rb_reference *ref;
+    struct rb_reference_bake_point *bake_points;
+    float *bake_rgb;
+    uint32_t bake_capacity;
+    bool has_bake;
 };
 
 static uint32_t history_frames(const struct rb_job *job)
@@ -68,6 +82,9 @@ static void destroy(struct rb_integrator *it, void *state)
     rb_pass_hybrid_destroy(d->passes);
     rb_base_destroy(&d->base);
     rb_scene_pose_destroy(d->bvh_pose);
+    rb_reference_destroy(d->ref);
+    free(d->bake_points);
+    free(d->bake_rgb);
     free(d->positions);
     free(d->built);
     free(d->indices);
@@ -141,7 +158,9 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
                               &h->blocks, err)) ||
         (st = rb_frame_buffer(gpu, (uint64_t)d->node_capacity * sizeof(struct rb_gpu_bvh_node),
                               storage, true, "hybrid.bvh_nodes", &h->bvh_nodes, err)) ||
-        (st = rb_frame_buffer(gpu, (uint64_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle),
+        (st = rb_frame_buffer(gpu,
+                              (uint64_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle) +
+                                  (uint64_t)d->bake_capacity * 16,
                               storage, true, "hybrid.bvh_tris", &h->bvh_tris, err)) ||
         (st = rb_frame_buffer(gpu, 2 * tiles * sizeof(float), storage, false, "hybrid.tiles",
                               &h->tiles, err)))
@@ -177,6 +196,60 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
     return rb_gpu_oneshot_end(gpu, cmd, err);
 }
 
+/* Whether anything would be baked: an emissive material on some instance, or a lit
+ * environment. */
+static bool has_light_to_bake(const struct rb_integrator *it)
+{
+    const struct rb_job *job = it->job;
+    const float *c = job->environment.color;
+    if (job->environment.intensity > 0.0f &&
+        (it->env_rgba || c[0] > 0.0f || c[1] > 0.0f || c[2] > 0.0f))
+        return true;
+    const struct rb_scene_pose *pose = it->cur.pose;
+    for (uint32_t i = 0; i < pose->instance_count; i++) {
+        uint32_t m = it->scene->primitives[pose->instances[i].primitive].material;
+        const float *e = m < it->scene->material_count ? it->scene->materials[m].emissive : NULL;
+        if (e && (e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f))
+            return true;
+    }
+    return false;
+}
+
+/* The bake's world and buffers: room for bake_texels points beyond the three of each side of
+ * every triangle the BVH may hold. */
+static enum rb_status bake_init(struct rb_integrator *it, struct hybrid *d, struct rb_err *err)
+{
+    const struct rb_job_hybrid *s = d->settings;
+    if (s->bake_samples == 0 || !has_light_to_bake(it))
+        return RB_OK;
+    uint64_t budget = s->bvh_triangles < d->triangle_count ? s->bvh_triangles : d->triangle_count;
+    uint64_t cap = (uint64_t)s->bake_texels + 6 * budget;
+    /* the points follow the triangles' room in their buffer, 3 vec4s a triangle */
+    if (3 * budget + cap >= (1ull << (32 - RB_HYBRID_BAKE_SHIFT)))
+        return rb_errf(err, RB_E_INVALID,
+                       "hybrid: %llu baked points (integrator.hybrid.bake_texels %u and the "
+                       "vertices of %llu triangles) are more than the %llu the bake can index",
+                       (unsigned long long)cap, s->bake_texels, (unsigned long long)budget,
+                       (unsigned long long)(1ull << (32 - RB_HYBRID_BAKE_SHIFT)) - 1);
+    d->bake_capacity = (uint32_t)cap;
+    d->bake_points = malloc((size_t)cap * sizeof(*d->bake_points));
+    d->bake_rgb = malloc((size_t)cap * 3 * sizeof(float));
+    if (!d->bake_points || !d->bake_rgb)
+        return rb_errf(err, RB_E_NOMEM, "out of memory for %llu baked points",
+                       (unsigned long long)cap);
+    const struct rb_reference_desc desc = {.job = it->job,
+                                           .scene = it->scene,
+                                           .env_rgba = it->env_rgba,
+                                           .env_width_px = it->env_width_px,
+                                           .env_height_px = it->env_height_px,
+                                           .setup = &it->setup,
+                                           .is_bake_only = true};
+    enum rb_status st = rb_reference_create(&desc, &d->ref, err);
+    if (st)
+        rb_err_prefix(err, "hybrid: the baked light's world");
+    return st;
+}
+
 static enum rb_status create(struct rb_integrator *it, void **state, struct rb_err *err)
 {
     struct hybrid *d = calloc(1, sizeof(*d));
@@ -187,7 +260,8 @@ static enum rb_status create(struct rb_integrator *it, void **state, struct rb_e
     enum rb_status st;
     if ((st = rb_base_create(it, &d->base, err)) ||
         (st = rb_pass_hybrid_create(it->gpu, &d->passes, err)) ||
-        (st = geometry_init(it, d, err)) || (st = create_resources(it, d, err))) {
+        (st = geometry_init(it, d, err)) || (st = bake_init(it, d, err)) ||
+        (st = create_resources(it, d, err))) {
         destroy(it, d);
         return st;
     }
@@ -203,6 +277,125 @@ static int64_t bvh_epoch(const struct rb_integrator *it, const struct hybrid *d,
     int64_t k = d->settings->bvh_interval;
     int64_t m = ((rel % k) + k) % k;
     return (int64_t)frame - m;
+}
+
+static uint32_t lattice_points(uint32_t r)
+{
+    return (r + 1) * (r + 2) / 2;
+}
+
+/* A triangle's lattice resolution for point spacing h: its longest edge over h, 1 to the most. */
+static uint32_t lattice_res(double edge, double h)
+{
+    if (!(h > 0.0))
+        return RB_HYBRID_BAKE_MAX_RES;
+    double r = ceil(edge / h);
+    return r < 1.0 ? 1 : r > RB_HYBRID_BAKE_MAX_RES ? RB_HYBRID_BAKE_MAX_RES : (uint32_t)r;
+}
+
+static uint64_t lattice_total(const struct rb_bvh *bvh, const double *edge, const uint8_t *sides,
+                              double h)
+{
+    uint64_t n = 0;
+    for (uint32_t k = 0; k < bvh->triangle_count; k++)
+        n += (uint64_t)sides[k] * lattice_points(lattice_res(edge[k], h));
+    return n;
+}
+
+static double edge_len(const float a[4], const float b[4])
+{
+    double x = (double)a[0] - b[0], y = (double)a[1] - b[1], z = (double)a[2] - b[2];
+    return sqrt(x * x + y * y + z * z);
+}
+
+/* Bakes the emitters' and the environment's light at the lattices of the BVH's triangles (pose
+ * of frame epoch) into the device's bake buffer and each triangle's v2.w. The spacing is the
+ * finest whose points fit bake_texels (every triangle has at least its three corners' worth). */
+static enum rb_status bake(struct rb_integrator *it, struct hybrid *d, struct rb_bvh *bvh,
+                           int64_t epoch, struct rb_err *err)
+{
+    uint32_t n = bvh->triangle_count;
+    double *edge = malloc(((size_t)n + 1) * sizeof(double));
+    uint8_t *sides = malloc((size_t)n + 1);
+    if (!edge || !sides) {
+        free(edge);
+        free(sides);
+        return rb_errf(err, RB_E_NOMEM, "out of memory for the bake of %u triangles", n);
+    }
+    const struct rb_scene *scene = it->scene;
+    const struct rb_scene_pose *pose = it->cur.pose;
+    double longest = 0.0;
+    for (uint32_t k = 0; k < n; k++) {
+        const struct rb_gpu_bvh_triangle *t = &bvh->triangles[k];
+        double e =
+            fmax(edge_len(t->v0, t->v1), fmax(edge_len(t->v1, t->v2), edge_len(t->v2, t->v0)));
+        edge[k] = e;
+        longest = fmax(longest, e);
+        uint32_t object;
+        memcpy(&object, &t->v1[3], sizeof(object));
+        uint32_t m = scene->primitives[pose->instances[object].primitive].material;
+        sides[k] = m < scene->material_count && scene->materials[m].double_sided ? 2 : 1;
+    }
+    /* The finest spacing that fits: bisection between 0 (the finest lattices) and the longest
+     * edge (three points a side); the budget never falls below what the coarsest needs. */
+    uint64_t coarsest = lattice_total(bvh, edge, sides, longest);
+    uint64_t cap = d->settings->bake_texels > coarsest ? d->settings->bake_texels : coarsest;
+    double h = 0.0;
+    if (lattice_total(bvh, edge, sides, 0.0) > cap) {
+        double lo = 0.0, hi = longest;
+        for (int i = 0; i < 60; i++) {
+            double mid = 0.5 * (lo + hi);
+            if (lattice_total(bvh, edge, sides, mid) > cap)
+                lo = mid;
+            else
+                hi = mid;
+        }
+        h = hi;
+    }
+    uint32_t count = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        struct rb_gpu_bvh_triangle *t = &bvh->triangles[k];
+        uint32_t r = lattice_res(edge[k], h), id;
+        memcpy(&id, &t->v0[3], sizeof(id));
+        uint32_t first = 3 * d->tri_capacity + count;
+        uint32_t word =
+            (first << RB_HYBRID_BAKE_SHIFT) | r | (sides[k] == 2 ? RB_HYBRID_BAKE_BACK : 0);
+        memcpy(&t->v2[3], &word, sizeof(word));
+        const float c = 1.0f / 3.0f, shrink = 1.0f - (float)RB_HYBRID_BAKE_SHRINK;
+        for (uint32_t s = 0; s < sides[k]; s++)
+            for (uint32_t j = 0; j <= r; j++)
+                for (uint32_t i = 0; i + j <= r; i++)
+                    d->bake_points[count++] = (struct rb_reference_bake_point){
+                        .triangle = id,
+                        .u = c + ((float)i / (float)r - c) * shrink,
+                        .v = c + ((float)j / (float)r - c) * shrink,
+                        .is_back = s == 1,
+                    };
+    }
+    free(edge);
+    free(sides);
+    if (count > d->bake_capacity)
+        return rb_errf(err, RB_E_INVALID,
+                       "hybrid: the bake of frame %lld needs %u points, more than the %u it was "
+                       "given room for",
+                       (long long)epoch, count, d->bake_capacity);
+    double start = rb_monotonic_s();
+    uint64_t rays = 0;
+    enum rb_status st = rb_reference_bake(d->ref, (int)epoch, d->bake_points, count,
+                                          d->settings->bake_samples, d->bake_rgb, &rays, err);
+    if (st)
+        return st;
+    float *dst = (float *)((char *)d->h.bvh_tris.mapped +
+                           (size_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle));
+    for (uint32_t i = 0; i < count; i++) {
+        memcpy(dst + (size_t)i * 4, d->bake_rgb + (size_t)i * 3, 3 * sizeof(float));
+        dst[(size_t)i * 4 + 3] = 0.0f;
+    }
+    rb_log(RB_LOG_DEBUG,
+           "hybrid: baked %u points of %u triangles for frame %lld, %llu rays, %.1f ms", count, n,
+           (long long)epoch, (unsigned long long)rays, (rb_monotonic_s() - start) * 1e3);
+    d->has_bake = true;
+    return RB_OK;
 }
 
 /* Builds the BVH of the pose at frame epoch and uploads it. */
@@ -241,7 +434,7 @@ static enum rb_status build_bvh(struct rb_integrator *it, struct hybrid *d, int6
                      "the %u and %u it was given room for",
                      (long long)epoch, bvh.node_count, bvh.triangle_count, d->node_capacity,
                      d->tri_capacity);
-    } else {
+    } else if (!d->ref || (st = bake(it, d, &bvh, epoch, err)) == RB_OK) {
         memcpy(d->h.bvh_nodes.mapped, bvh.nodes, bvh.node_count * sizeof(*bvh.nodes));
         memcpy(d->h.bvh_tris.mapped, bvh.triangles, bvh.triangle_count * sizeof(*bvh.triangles));
         if (bvh.triangles_left_out)
@@ -292,7 +485,8 @@ static void set_push(const struct rb_integrator *it, struct hybrid *d, int frame
         .sizes = {s->spp, s->screen_steps, d->queue_capacity, d->h.hiz_levels},
         .more = {0, 0, 0, s->filter_radius_px},
         .params = {s->noise, s->thickness, s->filter_depth, s->filter_normal},
-        .scene = {sqrtf(dx * dx + dy * dy + dz * dz), 1e-4f, 0.0f, 0.0f},
+        .scene = {sqrtf(dx * dx + dy * dy + dz * dz), 1e-4f, d->has_bake ? 1.0f : 0.0f,
+                  s->check_screen ? 1.0f : 0.0f},
     };
     d->h.cur = (uint32_t)frame & 1u;
 }
@@ -389,6 +583,9 @@ static void collect(struct rb_integrator *it, void *state, struct rb_frame_resul
         .bvh_hits = c->rays[3],
         .misses = c->more[0],
         .dropped = c->more[1],
+        .has_check = d->settings->check_screen,
+        .screen_checked = c->check[0],
+        .screen_agreed = c->check[1],
     };
     out->ray_counts = &d->counts;
 }

@@ -19,7 +19,8 @@ struct rb_integrator_desc {
     const struct rb_job *job;     /* borrowed; must outlive the integrator */
     const struct rb_scene *scene; /* borrowed; must outlive the integrator */
     struct rb_gpu *gpu;           /* borrowed */
-    const float *env_rgba;        /* equirectangular RGBA, or NULL for the job's uniform color */
+    const float *env_rgba;        /* equirectangular RGBA, or NULL for the job's uniform color;
+                                   * borrowed, must outlive the integrator */
     uint32_t env_width_px, env_height_px;
     const struct rb_scene_setup *setup; /* borrowed, or NULL: the integrator decides its own */
     uint32_t history_frames; /* 0: the integrator's own; more: keep (and warm up) this many

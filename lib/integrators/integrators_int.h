@@ -64,6 +64,8 @@ struct rb_integrator {
     const struct rb_scene *scene;
     struct rb_scene_setup setup;
     bool has_env_map;
+    const float *env_rgba; /* desc's, borrowed for the integrator's life (the hybrid's bake) */
+    uint32_t env_width_px, env_height_px;
     uint32_t history_frames;
     uint32_t *clips;
     struct rb_anim_selection sel;

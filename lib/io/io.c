@@ -1006,12 +1006,19 @@ enum rb_status rb_io_timing_write(const char *path, const struct rb_io_timing *t
         text_printf(&t, ",\n  \"rays\": %llu", (unsigned long long)tm->ray_count);
     if (tm->ray_counts) {
         const struct rb_ray_counts *c = tm->ray_counts;
-        text_printf(&t,
-                    ",\n  \"ray_counts\": {\"requested\": %llu, \"screen_hits\": %llu, "
-                    "\"queued\": %llu, \"bvh_hits\": %llu, \"misses\": %llu, \"dropped\": %llu}",
-                    (unsigned long long)c->requested, (unsigned long long)c->screen_hits,
-                    (unsigned long long)c->queued, (unsigned long long)c->bvh_hits,
-                    (unsigned long long)c->misses, (unsigned long long)c->dropped);
+        /* a field at a time: text_printf holds one short line */
+        const uint64_t v[] = {c->requested, c->screen_hits, c->queued,
+                              c->bvh_hits,  c->misses,      c->dropped};
+        const char *const key[] = {"requested", "screen_hits", "queued",
+                                   "bvh_hits",  "misses",      "dropped"};
+        text_puts(&t, ",\n  \"ray_counts\": {");
+        for (size_t i = 0; i < sizeof(v) / sizeof(v[0]); i++)
+            text_printf(&t, "%s\"%s\": %llu", i ? ", " : "", key[i], (unsigned long long)v[i]);
+        text_puts(&t, "}");
+        if (c->has_check)
+            text_printf(&t, ",\n  \"screen_check\": {\"checked\": %llu, \"agreed\": %llu}",
+                        (unsigned long long)c->screen_checked,
+                        (unsigned long long)c->screen_agreed);
     }
     if (tm->hits) {
         const double v[] = {tm->hits->mean, tm->hits->p5, tm->hits->p50, tm->hits->p95};

@@ -248,6 +248,13 @@ static const struct key keys[] = {
       "hybrid: triangle budget of the BVH, filled with the objects of best score; 0: none"),
     K("integrator.hybrid.bvh_interval", KT_UINT, JOB(integrator.hybrid.bvh_interval), 1, 100000,
       "1", 0, "hybrid: frames between BVH builds (frames that are multiples of it build)"),
+    K("integrator.hybrid.bake_texels", KT_UINT, JOB(integrator.hybrid.bake_texels), 0, 1u << 26,
+      "65536", 0,
+      "hybrid: points of the BVH's baked emitter and environment light beyond its vertices"),
+    K("integrator.hybrid.bake_samples", KT_UINT, JOB(integrator.hybrid.bake_samples), 0, 65536,
+      "32", 0, "hybrid: light samples per baked point; 0: no bake"),
+    K("integrator.hybrid.check_screen", KT_BOOL, JOB(integrator.hybrid.check_screen), NOLO, NOHI,
+      "false", 0, "hybrid: also trace screen-space hits through the BVH and count agreement"),
     K("integrator.hybrid.queue_rays", KT_UINT, JOB(integrator.hybrid.queue_rays), 0, UINT32_MAX,
       "0", 0, "hybrid: BVH ray queue capacity; 0: every ray a frame can request"),
     K("integrator.hybrid.filter_radius", KT_UINT, JOB(integrator.hybrid.filter_radius_px), 0, 16,
@@ -1326,7 +1333,10 @@ void rb_job_rehash(struct rb_job *job)
         h = h_u32(h, y->screen_steps);
         h = h_u32(h, y->bvh_triangles);
         h = h_u32(h, y->bvh_interval);
-        h = h_u32(h, y->queue_rays); /* an overflowing queue drops rays */
+        h = h_u32(h, y->bake_texels);
+        h = h_u32(h, y->bake_samples);
+        h = h_u32(h, y->check_screen); /* the sidecar's screen_check */
+        h = h_u32(h, y->queue_rays);   /* an overflowing queue drops rays */
         h = h_u32(h, y->filter_radius_px);
         h = h_f32(h, y->filter_depth);
         h = h_f32(h, y->filter_normal);

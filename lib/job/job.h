@@ -175,6 +175,9 @@ struct rb_job {
             uint32_t screen_steps;     /* most hierarchical depth steps a ray, default 96 */
             uint32_t bvh_triangles;    /* BVH triangle budget, default 2000000 */
             uint32_t bvh_interval;     /* frames between BVH builds, default 1 */
+            uint32_t bake_texels;      /* baked light points past the vertices, 65536 */
+            uint32_t bake_samples;     /* light samples a baked point, default 32; 0: none */
+            bool check_screen;         /* screen hits traced again through the BVH */
             uint32_t queue_rays;       /* BVH queue capacity; 0: every ray of a frame */
             uint32_t filter_radius_px; /* the filter's radius at one sample, default 6 */
             float filter_depth;        /* relative depth difference that stops it, 0.05 */

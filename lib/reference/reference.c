@@ -321,6 +321,10 @@ enum rb_status rb_reference_create(const struct rb_reference_desc *desc, struct 
     if ((st = rb_ref_env_init(&ref->env, err)))
         goto fail;
 
+    if (desc->is_bake_only) {
+        *out = ref;
+        return RB_OK;
+    }
     ref->width_px = job->width_px;
     ref->height_px = job->height_px;
     if (ref->width_px == 0 || ref->height_px == 0) {
@@ -695,9 +699,118 @@ static uint64_t run_stage(struct rb_reference *ref, struct stage *st)
     return atomic_load(&st->rays);
 }
 
+/* ---- the bake ------------------------------------------------------------------------------ */
+
+struct bake {
+    struct rb_reference *ref;
+    const struct rb_reference_bake_point *points;
+    uint32_t count, samples;
+    float *out;
+    atomic_uint next;
+    atomic_uint_fast64_t rays;
+};
+
+#define BAKE_CHUNK 64
+
+/* Point i on its side: the triangle's face normal, and the interpolated vertex normal turned to
+ * the face normal's side (as the BVH's hits shade), both flipped for the back. */
+static void bake_point(const struct rb_ref_world *w, const struct rb_reference_bake_point *pt,
+                       uint32_t index, uint32_t samples, float out[3], uint64_t *rays)
+{
+    const uint32_t *tri = &w->tris[(size_t)pt->triangle * 3];
+    const float *p0 = &w->pos[tri[0] * 4], *p1 = &w->pos[tri[1] * 4], *p2 = &w->pos[tri[2] * 4];
+    float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+    float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+    float ng[3], n[3], p[3];
+    rb_ref_cross(e1, e2, ng);
+    float b0 = 1.0f - pt->u - pt->v;
+    for (int c = 0; c < 3; c++)
+        n[c] = b0 * w->nrm[tri[0] * 3 + c] + pt->u * w->nrm[tri[1] * 3 + c] +
+               pt->v * w->nrm[tri[2] * 3 + c];
+    float lg = sqrtf(rb_ref_dot(ng, ng)), ln = sqrtf(rb_ref_dot(n, n));
+    out[0] = out[1] = out[2] = 0.0f;
+    if (!(lg > 0.0f) || !(lg < INFINITY))
+        return;
+    float side = pt->is_back ? -1.0f : 1.0f;
+    bool has_n = ln > 0.0f && ln < INFINITY;
+    for (int c = 0; c < 3; c++) {
+        ng[c] *= side / lg;
+        n[c] = has_n ? n[c] / ln : ng[c];
+    }
+    if (rb_ref_dot(n, ng) < 0.0f)
+        for (int c = 0; c < 3; c++)
+            n[c] = -n[c];
+    rb_ref_hit_point(w, pt->triangle, pt->u, pt->v, p);
+    double sum[3] = {0.0, 0.0, 0.0};
+    for (uint32_t k = 0; k < samples; k++) {
+        struct rb_ref_rng rng;
+        rb_ref_rng_init(&rng, w->is_hashed_sampler, 0, index, k);
+        float e[3] = {0.0f, 0.0f, 0.0f};
+        rb_ref_bake_sample(w, p, n, ng, &rng, e, rays);
+        for (int c = 0; c < 3; c++)
+            sum[c] += e[c];
+    }
+    for (int c = 0; c < 3; c++)
+        out[c] = (float)(sum[c] / samples);
+}
+
+static void *bake_worker(void *arg)
+{
+    struct bake *bk = arg;
+    const struct rb_ref_world *w = &bk->ref->world;
+    uint64_t rays = 0;
+    for (;;) {
+        uint32_t i0 = atomic_fetch_add(&bk->next, BAKE_CHUNK);
+        if (i0 >= bk->count)
+            break;
+        uint32_t i1 = bk->count - i0 < BAKE_CHUNK ? bk->count : i0 + BAKE_CHUNK;
+        for (uint32_t i = i0; i < i1; i++)
+            bake_point(w, &bk->points[i], i, bk->samples, bk->out + (size_t)i * 3, &rays);
+    }
+    atomic_fetch_add(&bk->rays, rays);
+    return NULL;
+}
+
+enum rb_status rb_reference_bake(struct rb_reference *ref, int frame,
+                                 const struct rb_reference_bake_point *points, uint32_t count,
+                                 uint32_t samples, float *out, uint64_t *rays, struct rb_err *err)
+{
+    double rate = ref->job->rate_fps > 0.0 ? ref->job->rate_fps : 1.0;
+    enum rb_status st = prepare_frame(ref, frame, frame / rate, (frame - 1) / rate, err);
+    if (st) {
+        rb_err_prefix(err, "the baked light of frame %d", frame);
+        return st;
+    }
+    for (uint32_t i = 0; i < count; i++)
+        if (points[i].triangle >= ref->tri_count)
+            return rb_errf(err, RB_E_INVALID, "bake point %u: triangle %u of %u", i,
+                           points[i].triangle, ref->tri_count);
+    struct bake bk = {
+        .ref = ref, .points = points, .count = count, .samples = samples ? samples : 1, .out = out};
+    atomic_init(&bk.next, 0u);
+    atomic_init(&bk.rays, 0u);
+    pthread_t threads[MAX_THREADS];
+    uint32_t chunks = (count + BAKE_CHUNK - 1) / BAKE_CHUNK;
+    uint32_t want = ref->thread_count < chunks ? ref->thread_count : chunks;
+    uint32_t started = 0;
+    for (uint32_t i = 1; i < want; i++) {
+        if (pthread_create(&threads[started], NULL, bake_worker, &bk) != 0)
+            break;
+        started++;
+    }
+    bake_worker(&bk);
+    for (uint32_t i = 0; i < started; i++)
+        pthread_join(threads[i], NULL);
+    if (rays)
+        *rays = atomic_load(&bk.rays);
+    return RB_OK;
+}
+
 enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct rb_frame_result *out,
                                    struct rb_err *err)
 {
+    if (!ref->pixels)
+        return rb_errf(err, RB_E_INVALID, "a reference made for baking renders no frames");
     double start = rb_monotonic_s();
     double rate = ref->job->rate_fps > 0.0 ? ref->job->rate_fps : 1.0;
     double t = frame / rate, t_prev = (frame - 1) / rate;

@@ -32,6 +32,9 @@ struct rb_reference_desc {
      * may be NULL. Returning false stops after that pass (as a time limit does). */
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
     void *user;
+    /* Only for rb_reference_bake: no image (rb_reference_render refuses), so the job's
+     * resolution costs no memory. */
+    bool is_bake_only;
 };
 
 /* Builds the reference for the job and scene (Embree device, light tables). Fails with
@@ -50,6 +53,29 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct r
                                    struct rb_err *err);
 
 void rb_reference_destroy(struct rb_reference *ref);
+
+/* A point of the bake: triangle (in the order of the scene's instances, each primitive's index
+ * list: lib/integrators/frame.c's world indices) at barycentrics u, v of its second and third
+ * vertices, on the side its vertices' winding faces (front) or the other (is_back). */
+struct rb_reference_bake_point {
+    uint32_t triangle;
+    float u, v;
+    bool is_back;
+};
+
+/* The direct light of the emissive triangles and the environment at surface points, with exact
+ * visibility through the whole scene at frame (the hybrid integrator's baked light: seed 003,
+ * "bake direct artificial light"). Point i gets in out[3i..3i+2] the radiance a white
+ * Lambertian surface there reflects, irradiance / pi, on its side, with the interpolated vertex
+ * normal turned to that side (no normal map), from `samples` samples each of an emitter point
+ * (chosen by power, then by area) and of an environment direction (by the map's importance),
+ * light sampling alone. Deterministic: the numbers of point i are the reference's of (frame 0,
+ * pixel i, sample k) whatever the frame, summed in sample order whatever the threads, so the
+ * bake is a function of the points and the frame's geometry alone. rays, if not NULL, gets
+ * the shadow rays cast. Fails with RB_E_INVALID for a triangle out of range. */
+enum rb_status rb_reference_bake(struct rb_reference *ref, int frame,
+                                 const struct rb_reference_bake_point *points, uint32_t count,
+                                 uint32_t samples, float *out, uint64_t *rays, struct rb_err *err);
 
 /* Embree's version, e.g. "3.13.5". */
 const char *rb_reference_embree_version(void);

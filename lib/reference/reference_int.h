@@ -212,6 +212,13 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
                          const float dir[3], const struct rb_ref_rng *rng,
                          struct rb_ref_sample_light *out, uint64_t *rays);
 
+/* Adds one sample of the direct light of the emitters and the environment at point p (shading
+ * normal n, geometric normal ng, both on the lit side) to out, as a white Lambertian surface
+ * there reflects it (irradiance / pi): reference.c's rb_reference_bake. */
+void rb_ref_bake_sample(const struct rb_ref_world *w, const float p[3], const float n[3],
+                        const float ng[3], const struct rb_ref_rng *rng, float out[3],
+                        uint64_t *rays);
+
 /* ---- small vector helpers ------------------------------------------------------------------- */
 
 /* max and min that compile to one instruction (fmaxf is a libm call without -ffast-math); a NaN

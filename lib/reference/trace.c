@@ -340,3 +340,55 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
         dir[2] = l[2];
     }
 }
+
+/* One sample of the direct light at a point for the hybrid's bake: one emitter point chosen by
+ * power and one environment direction by its importance, each with its shadow ray and without
+ * MIS (light sampling alone is unbiased), weighted as a white Lambertian surface reflects them:
+ * cos / pi. n is the shading normal and ng the geometric normal, on the side being lit. */
+void rb_ref_bake_sample(const struct rb_ref_world *w, const float p[3], const float n[3],
+                        const float ng[3], const struct rb_ref_rng *rng, float out[3],
+                        uint64_t *rays)
+{
+    float org[3];
+    rb_ref_offset(p, ng, org);
+    if (w->emitter_count > 0) {
+        uint32_t prim = pick_emitter(w, rb_ref_rand(rng, DIM_EMIT_PICK));
+        float uv[2];
+        rb_ref_rand2(rng, DIM_EMIT_UV, uv);
+        float su = sqrtf(uv[0]), r = uv[1];
+        float bu = su * (1.0f - r), bv = su * r;
+        float q[3], ne[3], le[3];
+        rb_ref_hit_point(w, prim, bu, bv, q);
+        float d[3] = {q[0] - org[0], q[1] - org[1], q[2] - org[2]};
+        float dist2 = rb_ref_dot(d, d), dist = sqrtf(dist2);
+        face_normal(w, prim, ne);
+        float l[3] = {d[0] / dist, d[1] / dist, d[2] / dist};
+        float cos_l = dist > 0.0f ? fabsf(rb_ref_dot(ne, l)) : 0.0f;
+        float cos_s = dist > 0.0f && rb_ref_dot(ng, l) > 0.0f ? rb_ref_dot(n, l) : 0.0f;
+        float pdf = w->emit_pdf_area[prim] * dist2 / cos_l;
+        rb_ref_emission(w, prim, bu, bv, le);
+        if (cos_l > 0.0f && cos_s > 0.0f && pdf > 0.0f && pdf < INFINITY && !is_black(le)) {
+            if (rb_ref_dot(ne, l) > 0.0f)
+                for (int i = 0; i < 3; i++)
+                    ne[i] = -ne[i];
+            float q_off[3];
+            rb_ref_offset(q, ne, q_off);
+            if (!occluded_toward(w, org, q_off, rays))
+                for (int i = 0; i < 3; i++)
+                    out[i] += le[i] * cos_s / (RB_PI * pdf);
+        }
+    }
+    if (!w->env->is_black) {
+        float l[3], u[2], le[3];
+        rb_ref_rand2(rng, DIM_ENV_UV, u);
+        float pdf = rb_ref_env_sample(w->env, n, u[0], u[1], l);
+        float cos_s = pdf > 0.0f && rb_ref_dot(ng, l) > 0.0f ? rb_ref_dot(n, l) : 0.0f;
+        if (cos_s > 0.0f) {
+            rb_ref_env_eval(w->env, l, le);
+            (*rays)++;
+            if (!is_black(le) && !rb_ref_occluded(w, org, l, INFINITY))
+                for (int i = 0; i < 3; i++)
+                    out[i] += le[i] * cos_s / (RB_PI * pdf);
+        }
+    }
+}

@@ -188,7 +188,7 @@
 #define RB_BIND_HYBRID_QUEUE 15    /* slot indices for the BVH */
 #define RB_BIND_HYBRID_BLOCKS 16   /* queued rays per block of slots, then their prefix sums */
 #define RB_BIND_HYBRID_BVH_NODES 17
-#define RB_BIND_HYBRID_BVH_TRIS 18
+#define RB_BIND_HYBRID_BVH_TRIS 18 /* the triangles, then the baked points (hybrid_shared.h) */
 #define RB_BIND_HYBRID_VERTICES 19 /* this frame's world vertices */
 #define RB_BIND_HYBRID_INDICES 20
 #define RB_BIND_HYBRID_MATERIALS 21

@@ -14,6 +14,7 @@ struct rb_bvh_hit {
     float t;
     uint triangle; // global triangle id
     vec2 bary;     // weights of the triangle's second and third vertices
+    uint extra;    // the triangle's v2.w, as bits (the hybrid's bake word)
 };
 
 // Möller-Trumbore, with the barycentrics let past the edges by a hair so that a ray through an
@@ -74,6 +75,7 @@ bool rb_bvh_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out rb_b
     hit.t = tmax;
     hit.triangle = RB_NONE;
     hit.bary = vec2(0.0);
+    hit.extra = 0u;
     for (;;) {
         rb_gpu_bvh_node n = bvh_nodes[node];
         uint word[2] = uint[2](floatBitsToUint(n.box0_min.w), floatBitsToUint(n.box1_min.w));
@@ -100,6 +102,7 @@ bool rb_bvh_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out rb_b
                 hit.t = t;
                 hit.triangle = id;
                 hit.bary = bary;
+                hit.extra = floatBitsToUint(tri.v2.w);
                 if (any_hit)
                     return true;
             }

@@ -15,7 +15,8 @@
  *
  * Triangles: world positions as given, in leaf order (each leaf's sorted by global id), with
  * the global triangle id (the index into the renderer's triangle list) in v0.w and the object
- * index (struct rb_bvh_object) in v1.w, both as float bits. */
+ * index (struct rb_bvh_object) in v1.w, both as float bits. lib/bvh leaves v2.w 0, for its user
+ * to fill (the hybrid integrator's bake word, hybrid_shared.h); a hit carries it. */
 #ifndef RB_SHADERS_BVH_SHARED_H
 #define RB_SHADERS_BVH_SHARED_H
 
@@ -38,7 +39,7 @@ struct rb_gpu_bvh_node {
 struct rb_gpu_bvh_triangle {
     RB_VEC4(v0); /* xyz: the first vertex, world space; w: global triangle id (float bits) */
     RB_VEC4(v1); /* xyz: the second; w: object index (float bits) */
-    RB_VEC4(v2); /* xyz: the third; w: 0 */
+    RB_VEC4(v2); /* xyz: the third; w: 0 from lib/bvh, the user's word */
 };
 
 /* bvh_trace.comp (tests/unit/test_bvh.c): one ray per invocation. */

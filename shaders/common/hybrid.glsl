@@ -1,7 +1,6 @@
 // The hybrid integrator's resources (one binding table for all its passes) and what its passes
 // share: the quasi-random numbers of a ray, BRDF sampling of each lobe, shading at a hit,
-// reprojection into the previous frame. The including shader defines its local size first; the
-// BVH's buffers are hybrid_bvh.comp's alone.
+// reprojection into the previous frame. The including shader defines its local size first.
 #ifndef RB_HYBRID_GLSL
 #define RB_HYBRID_GLSL
 
@@ -9,6 +8,7 @@
 #include "shared.h"
 #include "bdpt_shared.h"
 #include "hybrid_shared.h"
+#include "bvh_shared.h"
 #include "brdf.glsl"
 #include "encode.glsl"
 #include "lights.glsl"
@@ -31,6 +31,11 @@ layout(std430, binding = RB_BIND_HYBRID_SLOTS) buffer Slots { rb_gpu_hybrid_slot
 layout(std430, binding = RB_BIND_HYBRID_COUNTERS) buffer Counters { rb_gpu_hybrid_counters counters; };
 layout(std430, binding = RB_BIND_HYBRID_QUEUE) buffer Queue { uint queue[]; };
 layout(std430, binding = RB_BIND_HYBRID_BLOCKS) buffer Blocks { uint blocks[]; };
+layout(std430, binding = RB_BIND_HYBRID_BVH_NODES) readonly buffer BvhNodes { rb_gpu_bvh_node bvh_nodes[]; };
+layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer BvhTris { rb_gpu_bvh_triangle bvh_tris[]; };
+// The same buffer as vec4s: the baked points follow the triangles (the push descriptor set has
+// no binding to spare for them).
+layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer Bake { vec4 bake[]; };
 layout(std430, binding = RB_BIND_HYBRID_VERTICES) readonly buffer Verts { rb_gpu_vertex verts[]; };
 layout(std430, binding = RB_BIND_HYBRID_INDICES) readonly buffer Indices { uint indices[]; };
 layout(std430, binding = RB_BIND_HYBRID_MATERIALS) readonly buffer Materials { rb_gpu_material materials[]; };
@@ -49,6 +54,7 @@ layout(push_constant) uniform Push { rb_gpu_hybrid_push pc; };
 
 #include "shadow.glsl"
 #include "punctual.glsl"
+#include "bvh.glsl"
 
 float rb_lum(vec3 c)
 {
@@ -161,12 +167,78 @@ vec3 rb_hybrid_env(vec3 d)
     return env * g.env.x;
 }
 
-// The light a surface point sends toward v, but its emission: the punctual lights' direct light
-// through the shadow maps. (Shading at a hit, screen or BVH alike.)
-vec3 rb_hybrid_shade(vec3 p, vec3 n, vec3 ng, vec3 v, vec3 c_diff, vec3 f0, float f90,
-                     float roughness)
+uint rb_bake_point(uint base, uint r, uint i, uint j)
 {
-    return rb_punctual_light(vec3(0.0), p, n, ng, v, c_diff, f0, f90, roughness);
+    return base + j * (r + 1u) - (j * (j - 1u)) / 2u + i;
+}
+
+// The baked light (irradiance / pi) of a BVH triangle with bake word `word`, at barycentrics
+// bary of its second and third vertices, on its back or its front (hybrid_shared.h's lattice).
+vec3 rb_hybrid_baked(uint word, vec2 bary, bool back)
+{
+    uint r = word & RB_HYBRID_BAKE_MAX_RES;
+    if (r == 0u || (back && (word & RB_HYBRID_BAKE_BACK) == 0u))
+        return vec3(0.0);
+    uint base = word >> RB_HYBRID_BAKE_SHIFT;
+    if (back)
+        base += (r + 1u) * (r + 2u) / 2u;
+    // Undo the shrink, then find the lattice's small triangle the point is in.
+    vec2 c = vec2(1.0 / 3.0);
+    vec2 x = max(c + (bary - c) / (1.0 - RB_HYBRID_BAKE_SHRINK), vec2(0.0)) * float(r);
+    float over = x.x + x.y - float(r);
+    if (over > 0.0)
+        x -= 0.5 * over;
+    x = max(x, vec2(0.0));
+    uvec2 i0 = uvec2(min(floor(x), vec2(float(r - 1u))));
+    if (i0.x + i0.y > r - 1u) {
+        if (i0.x > 0u)
+            i0.x--;
+        else
+            i0.y--;
+    }
+    vec2 f = x - vec2(i0);
+    if (f.x + f.y <= 1.0 || i0.x + i0.y + 2u > r) {
+        vec3 w = max(vec3(1.0 - f.x - f.y, f.x, f.y), vec3(0.0));
+        w /= max(w.x + w.y + w.z, 1e-6);
+        return w.x * bake[rb_bake_point(base, r, i0.x, i0.y)].rgb +
+               w.y * bake[rb_bake_point(base, r, i0.x + 1u, i0.y)].rgb +
+               w.z * bake[rb_bake_point(base, r, i0.x, i0.y + 1u)].rgb;
+    }
+    return (f.x + f.y - 1.0) * bake[rb_bake_point(base, r, i0.x + 1u, i0.y + 1u)].rgb +
+           (1.0 - f.x) * bake[rb_bake_point(base, r, i0.x, i0.y + 1u)].rgb +
+           (1.0 - f.y) * bake[rb_bake_point(base, r, i0.x + 1u, i0.y)].rgb;
+}
+
+// The winding normal of global triangle t, in this frame's vertices.
+vec3 rb_hybrid_face_normal(uint t)
+{
+    vec3 p0 = verts[indices[3u * t]].position.xyz, p1 = verts[indices[3u * t + 1u]].position.xyz,
+         p2 = verts[indices[3u * t + 2u]].position.xyz;
+    return cross(p1 - p0, p2 - p0);
+}
+
+// The baked light at a surface point the camera sees (a screen hit): the BVH triangle under the
+// G-buffer's point p, found by a short ray down its geometric normal ng (the side the camera
+// sees), from a thousandth of its depth above to as far below. None when the BVH does not hold
+// the surface there.
+vec3 rb_hybrid_baked_at(vec3 p, vec3 ng, float depth)
+{
+    if (pc.scene.z == 0.0)
+        return vec3(0.0);
+    float e = 1e-3 * depth;
+    rb_bvh_hit hit;
+    if (!rb_bvh_intersect(p + ng * e, -ng, 0.0, 2.0 * e, hit))
+        return vec3(0.0);
+    return rb_hybrid_baked(hit.extra, hit.bary, dot(rb_hybrid_face_normal(hit.triangle), ng) < 0.0);
+}
+
+// The light a surface point sends toward v, but its emission: the punctual lights' direct light
+// through the shadow maps, and the baked light of the emitters and the environment (baked:
+// irradiance / pi) through its diffuse albedo. (Shading at a hit, screen or BVH alike.)
+vec3 rb_hybrid_shade(vec3 p, vec3 n, vec3 ng, vec3 v, vec3 c_diff, vec3 f0, float f90,
+                     float roughness, vec3 baked)
+{
+    return rb_punctual_light(vec3(0.0), p, n, ng, v, c_diff, f0, f90, roughness) + c_diff * baked;
 }
 
 // Where the pixel's surface was in the previous frame (its motion vector), or (-1, -1) when it

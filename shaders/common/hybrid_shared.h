@@ -48,6 +48,7 @@ struct rb_gpu_hybrid_slot {
 struct rb_gpu_hybrid_counters {
     RB_UVEC4(rays);     /* requested, screen hits, queued, BVH hits */
     RB_UVEC4(more);     /* misses, dropped (queue full), queue length, unused */
+    RB_UVEC4(check);    /* check_screen: screen hits traced again, those the BVH agrees with */
     RB_UVEC4(dispatch); /* x, y, z workgroups of the BVH pass */
 };
 
@@ -59,6 +60,19 @@ struct rb_gpu_hybrid_counters {
 /* Side of the noise tiles (seed 003: variance over 16 x 16 tiles). */
 #define RB_HYBRID_TILE 16u
 
+/* The baked light of a BVH triangle (seed 003: "bake direct artificial light"), in the word its
+ * v2.w carries: 0 for none, else bits 0-3 its resolution R (1 to 15), bit 4 set when its back
+ * is baked too (a double-sided material), bits 5-31 the index of its first point, in vec4s from
+ * the start of the BVH's triangle buffer (the points follow the triangles' room there). Its (R + 1)(R + 2) / 2 points sit at barycentrics (i / R, j / R) of its second and
+ * third vertices, shrunk toward the centroid by RB_HYBRID_BAKE_SHRINK (so no point sits on an
+ * edge, where a neighbour's surface would shadow half of it), row j after row j - 1; the back's
+ * points follow the front's. Each holds irradiance / pi (what a white Lambertian surface
+ * reflects) in rgb, interpolated linearly across the lattice's small triangles. */
+#define RB_HYBRID_BAKE_MAX_RES 15u
+#define RB_HYBRID_BAKE_BACK 16u
+#define RB_HYBRID_BAKE_SHIFT 5u
+#define RB_HYBRID_BAKE_SHRINK 0.02
+
 /* Push constants of every hybrid pass: the one layout keeps the record code simple. */
 struct rb_gpu_hybrid_push {
     RB_UVEC4(frame);   /* frame index, rays a lobe, lobe of this dispatch, slots per lobe */
@@ -67,7 +81,8 @@ struct rb_gpu_hybrid_push {
     RB_UVEC4(level);   /* hiz: level written, its width, height, offset; queue: phase */
     RB_UVEC4(more);    /* hiz: offset of the level read, its width, height; filter radius */
     RB_VEC4(params);   /* noise target, thickness, filter depth stop, filter normal stop */
-    RB_VEC4(scene);    /* scene diagonal, ray offset (fraction of depth), unused, unused */
+    RB_VEC4(scene);    /* scene diagonal, ray offset (fraction of depth), baked light (0/1),
+                        * check_screen (0/1) */
 };
 
 #endif

@@ -704,6 +704,42 @@ static void test_timing_escapes(void **state)
     assert_int_equal(rb_io_timing_write(path, &bad, &err), RB_E_INVALID);
 }
 
+/* The hybrid's ray counts at their widest (each near 2^64: sums over many frames' worth of rays
+ * would not reach it, but no field may be cut), then the screen check, written only when on. */
+static void test_timing_ray_counts(void **state)
+{
+    (void)state;
+    struct rb_ray_counts c = {.requested = UINT64_MAX,
+                              .screen_hits = UINT64_MAX - 1,
+                              .queued = UINT64_MAX - 2,
+                              .bvh_hits = UINT64_MAX - 3,
+                              .misses = UINT64_MAX - 4,
+                              .dropped = UINT64_MAX - 5};
+    struct rb_io_timing t = {.frame = 1, .integrator = "hybrid", .ray_counts = &c};
+    struct rb_err err = RB_ERR_INIT;
+    const char *path = tpath("rays.timing.json");
+    if (rb_io_timing_write(path, &t, &err))
+        fail_msg("%s", err.msg);
+    char *s = slurp(path, NULL);
+    assert_non_null(strstr(s, "  \"ray_counts\": {\"requested\": 18446744073709551615, "
+                              "\"screen_hits\": 18446744073709551614, "
+                              "\"queued\": 18446744073709551613, "
+                              "\"bvh_hits\": 18446744073709551612, "
+                              "\"misses\": 18446744073709551611, "
+                              "\"dropped\": 18446744073709551610}"));
+    assert_null(strstr(s, "screen_check"));
+    free(s);
+    c.has_check = true;
+    c.screen_checked = 13282;
+    c.screen_agreed = 12865;
+    if (rb_io_timing_write(path, &t, &err))
+        fail_msg("%s", err.msg);
+    s = slurp(path, NULL);
+    assert_non_null(strstr(s, "\"dropped\": 18446744073709551610},\n"
+                              "  \"screen_check\": {\"checked\": 13282, \"agreed\": 12865}"));
+    free(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -713,7 +749,7 @@ int main(void)
         cmocka_unit_test(test_exr_errors),       cmocka_unit_test(test_is_complete),
         cmocka_unit_test(test_preview),          cmocka_unit_test(test_preview_errors),
         cmocka_unit_test(test_default_config),   cmocka_unit_test(test_timing_json),
-        cmocka_unit_test(test_timing_escapes),
+        cmocka_unit_test(test_timing_escapes),   cmocka_unit_test(test_timing_ray_counts),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

@@ -1,0 +1,83 @@
+#!/bin/sh
+# The hybrid integrator's hits (seed 003): what the screen trace hits is the surface the BVH
+# finds along the same ray; and the baked light of emitters and the environment gives an
+# area-lit room (the Cornell box, lit by its ceiling panel alone) its bounce, converging to the
+# reference with one bounce, where without the bake the bounce is missing.
+. tests/integration/lib.sh
+
+SAME="$BUILD/tests/tools/samebits"
+same() { "$SAME" "$1" "$2" >/dev/null; }
+below() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 < b + 0) }'; }
+relmse() { # relmse A B LAYER
+    "$RB" compare "$1" "$2" --layer "$3" --json | sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p' |
+        head -n 1
+}
+# screen_check FILE: "checked agreed" of a timing sidecar
+screen_check() {
+    sed -n 's/.*"screen_check": {"checked": \([0-9]*\), "agreed": \([0-9]*\)}.*/\1 \2/p' "$1"
+}
+
+# ---- the screen trace against the BVH, on the demo ------------------------------------------
+
+# The demo's own job, moving, at a small size: every screen-space hit is traced again through
+# the BVH (integrator.hybrid.check_screen), which must find the same surface: its hit projects
+# to the pixel the screen trace hit, or one beside it, on the plane of the G-buffer's surface.
+rb render jobs/demo.yaml --integrator hybrid --size 160x90 --frames 0-3 --out "$T/d" -q \
+    --set integrator.hybrid.check_screen=true --set integrator.hybrid.rays=2
+expect_exit 0 "4 frames of the demo with the screen check"
+for f in 0000 0003; do
+    set -- $(screen_check "$T/d/frame.$f.timing.json")
+    share=$(awk -v c="${1:-0}" -v a="${2:-0}" 'BEGIN { printf "%.4f", c ? a / c : 0 }')
+    echo "# frame $f: $2 of $1 screen hits agree with the BVH ($share)"
+    check "frame $f: at least 95% of the screen hits agree with the BVH ($share of ${1:-0})" \
+        awk -v s="$share" -v c="${1:-0}" 'BEGIN { exit !(s >= 0.95 && c > 1000) }'
+done
+check "without the check the sidecar has no screen_check" \
+    sh -c "rm -rf '$T/n' && '$RB' render jobs/demo.yaml --integrator hybrid --size 32x18 --frames 0 --out '$T/n' -q >/dev/null && ! grep -q screen_check '$T/n/frame.0000.timing.json'"
+
+# ---- the baked light: the Cornell box -------------------------------------------------------
+
+if have_scene cornell-box/CornellBox.glb; then
+    box="$SCENES/cornell-box/CornellBox.glb"
+    rb reference "$box" --size 64x64 --frames 63 --spp 1024 --out "$T/ref" -q \
+        --set integrator.reference.max_bounces=1
+    expect_exit 0 "the Cornell box's reference with one bounce, 1024 spp"
+    ref="$T/ref/frame.0063.exr"
+    # Enough samples that what is left is bias: 16 rays a lobe and frame, no noise target, a
+    # pixel aiming for 1024 samples, 256 light samples a baked point.
+    for bake in 256 0; do
+        rb render "$box" --integrator hybrid --size 64x64 --frames 0-63 --out "$T/c$bake" -q \
+            --set integrator.hybrid.history=64 --set integrator.hybrid.rays=16 \
+            --set integrator.hybrid.spp=1024 --set integrator.hybrid.noise=0 \
+            --set integrator.hybrid.bake_samples=$bake
+        expect_exit 0 "64 frames of the Cornell box, bake_samples $bake"
+    done
+    baked=$(relmse "$T/c256/frame.0063.exr" "$ref" indirect)
+    bare=$(relmse "$T/c0/frame.0063.exr" "$ref" indirect)
+    echo "# Cornell box indirect relMSE after 64 frames: $baked baked, $bare without the bake"
+    check "Cornell box: indirect within relMSE 0.01 of the reference after 64 frames ($baked)" \
+        below "$baked" 0.01
+    check "Cornell box: without the bake the bounce is missing (indirect relMSE $bare > 0.1)" \
+        below 0.1 "$bare"
+    direct=$(relmse "$T/c256/frame.0063.exr" "$ref" direct)
+    echo "# Cornell box direct relMSE after 64 frames: $direct (the panel found by BRDF samples)"
+    check "Cornell box: direct within relMSE 0.1 of the reference after 64 frames ($direct)" \
+        below "$direct" 0.1
+    # A chunk long after the start: its warm-ups build the BVH and bake from frame 12 where the
+    # whole run built them at frame 0 and kept them (the box does not move); the bake is a
+    # function of the geometry, not of the frame that made it.
+    for run in "0-19 w" "16-19 k"; do
+        set -- $run
+        rb render "$box" --integrator hybrid --size 32x32 --frames "$1" --out "$T/$2" -q \
+            --set integrator.hybrid.history=4
+        expect_exit 0 "the Cornell box, frames $1, history 4"
+    done
+    for f in 0016 0019; do
+        check "Cornell box: frame $f of the chunk 16-19 has the whole run's bits" \
+            same "$T/w/frame.$f.exr" "$T/k/frame.$f.exr"
+    done
+else
+    skip "the Cornell box's baked light" "no $SCENES/cornell-box/CornellBox.glb"
+fi
+
+done_testing
