@@ -4,7 +4,9 @@
 //   layout(std430, binding = ...) readonly buffer BvhTris { rb_gpu_bvh_triangle bvh_tris[]; };
 // Traversal: a fixed stack of RB_BVH_STACK_SIZE (the builder keeps every leaf shallower), both
 // children's boxes per visit, the nearer first; both faces hit. The closest hit is the least
-// (t, triangle id), so a tie goes to the lower id whatever the order of the visits.
+// (t, triangle id), so a tie goes to the lower id whatever the order of the visits. An includer
+// may define RB_BVH_FILTER(id, bary) first: a hit it returns false for is passed through (the
+// hybrid's alpha mask).
 #ifndef RB_BVH_GLSL
 #define RB_BVH_GLSL
 
@@ -98,6 +100,10 @@ bool rb_bvh_trace(vec3 o, vec3 d, float tmin, float tmax, bool any_hit, out rb_b
                     continue;
                 if (found && (t > hit.t || (t == hit.t && id >= hit.triangle)))
                     continue;
+#ifdef RB_BVH_FILTER
+                if (!RB_BVH_FILTER(id, bary))
+                    continue;
+#endif
                 found = true;
                 hit.t = t;
                 hit.triangle = id;

@@ -54,6 +54,25 @@ layout(push_constant) uniform Push { rb_gpu_hybrid_push pc; };
 
 #include "shadow.glsl"
 #include "punctual.glsl"
+
+// The BVH passes through the texels of an alpha-masked material under its cutoff, as the
+// G-buffer discards them and the reference's rays pass them.
+bool rb_hybrid_bvh_filter(uint t, vec2 bary)
+{
+    rb_gpu_vertex v0 = verts[indices[3u * t]];
+    rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
+    if (!(m.params.z > 0.0))
+        return true;
+    float a = m.base_color.a;
+    if (m.textures.x >= 0) {
+        vec2 uv = (1.0 - bary.x - bary.y) * v0.uv.xy + bary.x * verts[indices[3u * t + 1u]].uv.xy +
+                  bary.y * verts[indices[3u * t + 2u]].uv.xy;
+        a *= textureLod(srgb_textures, vec3(uv, float(m.textures.x)), 0.0).a;
+    }
+    return a >= m.params.z;
+}
+#define RB_BVH_FILTER rb_hybrid_bvh_filter
+
 #include "bvh.glsl"
 
 float rb_lum(vec3 c)

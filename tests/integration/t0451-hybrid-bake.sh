@@ -1,6 +1,7 @@
 #!/bin/sh
 # The hybrid integrator's hits (seed 003): what the screen trace hits is the surface the BVH
-# finds along the same ray; and the baked light of emitters and the environment gives an
+# finds along the same ray; the BVH passes alpha-masked texels as the G-buffer does; and the
+# baked light of emitters and the environment gives an
 # area-lit room (the Cornell box, lit by its ceiling panel alone) its bounce, converging to the
 # reference with one bounce, where without the bake the bounce is missing.
 . tests/integration/lib.sh
@@ -34,6 +35,33 @@ for f in 0000 0003; do
 done
 check "without the check the sidecar has no screen_check" \
     sh -c "rm -rf '$T/n' && '$RB' render jobs/demo.yaml --integrator hybrid --size 32x18 --frames 0 --out '$T/n' -q >/dev/null && ! grep -q screen_check '$T/n/frame.0000.timing.json'"
+
+# ---- alpha masks: the BVH passes what the G-buffer discards ----------------------------------
+
+# t0040's floor and occluder quad, the quad given a material of its own: masked out entirely
+# (alpha 0.1 under the cutoff 0.5: the G-buffer, the shadow maps and the reference see no quad)
+# or solid. A point light between the floor and the quad lights the quad's underside, so a ray
+# from the floor that hits the quad brings back light; the floor cannot light itself and the
+# environment is black, so the masked scene's indirect light is exactly zero everywhere. Every
+# ray goes through the BVH (screen_steps 0).
+"$BUILD/tests/tools/analytic" scene "$T" || fail_all "cannot write the analytic scene"
+ghost='{"name":"Ghost","doubleSided":true,"alphaMode":"MASK","alphaCutoff":0.5,"pbrMetallicRoughness":{"baseColorFactor":[0.8,0.8,0.8,0.1]}}'
+solid='{"name":"Ghost","doubleSided":true,"pbrMetallicRoughness":{"baseColorFactor":[0.8,0.8,0.8,1]}}'
+for v in ghost solid; do
+    eval "m=\$$v"
+    sed -e 's/"indices":5,"material":0/"indices":5,"material":1/' \
+        -e "s/],\"buffers\"/,$m],\"buffers\"/" "$T/plane.gltf" >"$T/$v.gltf"
+    sed -e "s/plane.gltf/$v.gltf/" -e 's/position: \[0, 2, 0\]/position: [1.5, 0.5, 0]/' \
+        -e 's/resolution: \[320, 200\]/resolution: [96, 60]/' "$T/point.yaml" >"$T/$v.yaml"
+    rb render "$T/$v.yaml" --integrator hybrid --frames 0-3 --out "$T/o$v" -q \
+        --set integrator.hybrid.screen_steps=0
+    expect_exit 0 "the floor under a $v quad renders"
+done
+nonzero() { "$BUILD/tests/tools/layersum" "$1" 1 indirect indirect | sed -n 's/^indirect total .* nonzero \([0-9]*\)$/\1/p' | head -n 1; }
+ng=$(nonzero "$T/oghost/frame.0003.exr")
+ns=$(nonzero "$T/osolid/frame.0003.exr")
+check "the masked quad sends no light through the BVH ($ng pixels with indirect light)" test "$ng" = 0
+check "the solid quad does ($ns pixels with indirect light)" test "${ns:-0}" -gt 1000
 
 # ---- the baked light: the Cornell box -------------------------------------------------------
 
