@@ -6,6 +6,7 @@
 #include "bindings_shared.h"
 #include "shared.h"
 #include "encode.glsl"
+#include "material.glsl"
 
 layout(std140, binding = RB_BIND_GBUFFER_GLOBALS) uniform Globals { rb_gpu_globals g; };
 layout(std430, binding = RB_BIND_GBUFFER_MATERIALS) readonly buffer Materials { rb_gpu_material materials[]; };
@@ -56,16 +57,10 @@ void main()
     // Make the geometric normal face the same side as the interpolated one.
     if (dot(ng, n) < 0.0)
         ng = -ng;
-    if (m.textures.z >= 0) {
-        vec3 t = i_tangent.xyz - n * dot(n, i_tangent.xyz);
-        if (dot(t, t) > 1e-12) {
-            t = normalize(t);
-            vec3 b = cross(n, t) * (i_tangent.w < 0.0 ? -1.0 : 1.0);
-            vec3 tn = texture(linear_textures, vec3(i_uv, float(m.textures.z))).xyz * 2.0 - 1.0;
-            tn.xy *= m.emissive.w;
-            n = normalize(t * tn.x + b * tn.y + n * tn.z);
-        }
-    }
+    if (m.textures.z >= 0)
+        n = rb_normal_map(n, i_tangent,
+                          texture(linear_textures, vec3(i_uv, float(m.textures.z))).xyz * 2.0 - 1.0,
+                          m.emissive.w);
 
     vec3 emission = m.emissive.rgb;
     if (m.textures.w >= 0)

@@ -1,6 +1,6 @@
 // hybrid_bvh: the queued rays through the BVH (seed 003: traverse the BVH later, in a compute
 // shader: the default device has no ray queries). A hit is shaded as a screen hit is: its
-// material at the hit (textures, no normal map), its emission as the camera vertex's direct
+// material at the hit (textures and normal map, at their full resolution), its emission as the camera vertex's direct
 // light, the punctual lights' shadow-mapped light and the triangle's baked light of the
 // emitters and the environment as the bounce; a miss takes the environment.
 // The back of a single-sided surface is an occluder that sends nothing.
@@ -43,6 +43,11 @@ void main()
             ng = -ng;
         if (dot(n, ng) < 0.0)
             n = -n;
+        if (m.textures.z >= 0) {
+            vec4 tangent = b.x * v0.tangent + b.y * v1.tangent + b.z * v2.tangent;
+            vec3 tn = textureLod(linear_textures, vec3(uv, float(m.textures.z)), 0.0).xyz;
+            n = rb_normal_map(n, tangent, tn * 2.0 - 1.0, m.emissive.w);
+        }
         rb_surface sf = rb_material_eval(m, uv, srgb_textures, linear_textures);
         vec3 p = o + hit.t * d;
         direct = weight * sf.emission;

@@ -40,6 +40,20 @@ rb_surface rb_material_eval(rb_gpu_material m, vec2 uv, sampler2DArray srgb_text
     return s;
 }
 
+// The shading normal n (unit, on the side being shaded) bent by a tangent-space normal map's
+// texel tn (already mapped to [-1, 1]) at the given scale, in the frame of the interpolated
+// tangent (xyz, w: handedness); n unchanged where the tangent is parallel to it.
+vec3 rb_normal_map(vec3 n, vec4 tangent, vec3 tn, float scale)
+{
+    vec3 t = tangent.xyz - n * dot(n, tangent.xyz);
+    if (!(dot(t, t) > 1e-12))
+        return n;
+    t = normalize(t);
+    vec3 b = cross(n, t) * (tangent.w < 0.0 ? -1.0 : 1.0);
+    tn.xy *= scale;
+    return normalize(t * tn.x + b * tn.y + n * tn.z);
+}
+
 // Whether the fragment is not there: alpha below the cutoff, or a single-sided face from behind.
 bool rb_material_discards(rb_gpu_material m, rb_surface s, bool front)
 {
