@@ -3,8 +3,8 @@
 # median GPU milliseconds, frames per second and peak resident memory; the timing compare of
 # the build against itself; the same frames as a Slurm array against one process; then the CPU
 # reference's speed, and its error on the Cornell box at 64 to 1024 spp; last, the bdpt
-# integrator's figures (tests/bench-bdpt.sh, which says what they are) and its temporal caches'
-# (tests/bench-temporal.sh).
+# integrator's figures (tests/bench-bdpt.sh, which says what they are), its temporal caches'
+# (tests/bench-temporal.sh) and the hybrid integrator's (tests/bench-hybrid.sh).
 set -eu
 BUILD=${BUILD:-build}
 . tests/bench-lib.sh
@@ -102,3 +102,4 @@ fi
 
 BUILD=$BUILD sh tests/bench-bdpt.sh
 BUILD=$BUILD sh tests/bench-temporal.sh
+BUILD=$BUILD sh tests/bench-hybrid.sh
