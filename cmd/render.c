@@ -295,6 +295,11 @@ static int parse_options(int argc, char **argv, struct options *o)
         return -1;
     }
     o->job_path = argv[optind];
+    /* The job's checks that depend on its integrator (the layers it can write) see the one that
+     * renders: the reference, whatever the job names. */
+    if (strcmp(o->command, "reference") == 0 &&
+        add_override(o, "integrator.name", "reference", "raybundle reference"))
+        return -1;
     return 0;
 }
 

@@ -7,8 +7,9 @@
 // the Cornell box's indirect relMSE after 64 one-ray frames was 0.077 that way, 0.015 this way.)
 // Neighbours weigh by a Gaussian of distance, stop at depth and normal edges, and count by their
 // samples (the filter averages sums over sample counts). The specular lobe's radius also scales
-// with the roughness, so a mirror stays sharp. Writes the samples and the tile mask (the EXR's
-// layers) with the diffuse lobe.
+// with the roughness, so a mirror stays sharp. With the diffuse lobe, writes what the samples
+// and tiles layers show: each lobe's samples in the accumulator the output reads (rg), and
+// whether its tile mask, as the next frame's requests read it, stops its rays (ba: 1 or 0).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 
@@ -56,10 +57,13 @@ void main()
     if (lobe == RB_HYBRID_DIFFUSE) {
         imageStore(o_direct_diffuse, px, dl);
         imageStore(o_indirect_diffuse, px, il);
-        uvec2 tiles_n = (g.size.xy + RB_HYBRID_TILE - 1u) / RB_HYBRID_TILE;
-        uvec2 t = uvec2(px) / RB_HYBRID_TILE;
         vec4 sp = imageLoad(acc, ivec3(px, 4u * pc.history.z + 2u));
-        imageStore(stats, px, vec4(d0.w, sp.w, tiles[t.y * tiles_n.x + t.x], 0.0));
+        // The tiles pass has just written the mask the next frame's rays follow (unless that
+        // frame starts the younger accumulator again); a target of 0 marks no tile done.
+        bool on = pc.params.x > 0.0;
+        float done_d = on && rb_hybrid_tile_done(px, true) >= 0.5 ? 1.0 : 0.0;
+        float done_s = on && rb_hybrid_tile_done(px, false) >= 0.5 ? 1.0 : 0.0;
+        imageStore(stats, px, vec4(d0.w, sp.w, done_d, done_s));
     } else {
         imageStore(o_direct_specular, px, dl);
         imageStore(o_indirect_specular, px, il);

@@ -1,9 +1,10 @@
 // output: packs the frame's layers into one buffer for a single readback: the beauty (RGBA),
 // then the layers the job writes, in the order direct, indirect, albedo, normal, depth, motion,
-// indirect_diffuse, indirect_specular (with all of them, the RB_OUT_* layout). The direct
-// integrator has no indirect light: zero; bdpt's is textured and added here, its two parts
-// summed exactly into indirect. Every value written that is NaN or infinite is counted
-// in `nonfinite` (an integer atomic add, so the count does not depend on the order).
+// indirect_diffuse, indirect_specular, samples, tiles (with all of them, the RB_OUT_* layout).
+// The direct integrator has no indirect light: zero; bdpt's is textured and added here, its two
+// parts summed exactly into indirect. samples and tiles are the hybrid's stats image as its
+// diffuse filter wrote it, zero without one. Every value written that is NaN or infinite is
+// counted in `nonfinite` (an integer atomic add, so the count does not depend on the order).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "bindings_shared.h"
@@ -27,6 +28,7 @@ layout(binding = RB_BIND_OUTPUT_LIGHT + RB_BDPT_DIRECT_DIFFUSE, rgba32f) uniform
 layout(binding = RB_BIND_OUTPUT_LIGHT + RB_BDPT_DIRECT_SPECULAR, rgba32f) uniform readonly image2D direct_specular;
 layout(binding = RB_BIND_OUTPUT_LIGHT + RB_BDPT_INDIRECT_DIFFUSE, rgba32f) uniform readonly image2D indirect_diffuse;
 layout(binding = RB_BIND_OUTPUT_LIGHT + RB_BDPT_INDIRECT_SPECULAR, rgba32f) uniform readonly image2D indirect_specular;
+layout(binding = RB_BIND_OUTPUT_STATS, rgba32f) uniform readonly image2D stats;
 
 // The band of rows this dispatch writes: Out is bound from the band's first row, so indices
 // into it count from there (lib/passes/output.c splits frames larger than one binding may be).
@@ -39,6 +41,7 @@ layout(push_constant) uniform Band
     uint layer_mask;
     uint floats_per_pixel;
     uint has_light; // bdpt's gathered light is bound
+    uint has_stats; // the hybrid's samples (rg) and tile masks (ba) are bound
 } band;
 
 uint bad = 0u;
@@ -101,6 +104,10 @@ void main()
     layer(RB_LAYER_MOTION, vec3(m, 0.0), 2u, at);
     layer(RB_LAYER_INDIRECT_DIFFUSE, ind_d, 3u, at);
     layer(RB_LAYER_INDIRECT_SPECULAR, ind_s, 3u, at);
+    bool wants_stats = (band.layer_mask & (3u << RB_LAYER_SAMPLES)) != 0u; // samples, tiles
+    vec4 st = band.has_stats != 0u && wants_stats ? imageLoad(stats, ip) : vec4(0.0);
+    layer(RB_LAYER_SAMPLES, vec3(st.rg, 0.0), 2u, at);
+    layer(RB_LAYER_TILES, vec3(st.ba, 0.0), 2u, at);
     for (; at < base + band.floats_per_pixel; at++)
         put(at, 0.0); // padding to 16 bytes a pixel
     if (bad > 0u)

@@ -23,9 +23,10 @@
 
 /* ---- layers ----------------------------------------------------------------------------- */
 
-/* The channels compared for a layer name: "beauty" is R,G,B; "normal" is normal.X/Y/Z;
- * "depth" is depth.Z; "motion" is motion.X/Y; any other NAME (direct, indirect, albedo, ...)
- * is NAME.R/G/B. */
+/* The channels compared for a layer name: "beauty" is R,G,B; a layer the renderer writes has
+ * its EXR channels (rb_layer_channel): "normal" is normal.X/Y/Z, "depth" is depth.Z, "motion"
+ * is motion.X/Y, "samples" is samples.diffuse/specular, direct is direct.R/G/B, ...; any other
+ * NAME is NAME.R/G/B. */
 struct rb_analysis_layer {
     char name[64];
     uint32_t channel_count; /* 1..RB_ANALYSIS_MAX_CHANNELS */

@@ -14,11 +14,7 @@ enum rb_status rb_analysis_layer_resolve(const char *name, struct rb_analysis_la
                                          struct rb_err *err)
 {
     static const char *const rgb[] = {"R", "G", "B"};
-    static const char *const xyz[] = {"X", "Y", "Z"};
-    static const char *const z[] = {"Z"};
-    static const char *const xy[] = {"X", "Y"};
     struct rb_analysis_layer l;
-    const char *const *suffixes = rgb;
 
     if (!out)
         return rb_errf(err, RB_E_INVALID, "layer: no output");
@@ -31,20 +27,16 @@ enum rb_status rb_analysis_layer_resolve(const char *name, struct rb_analysis_la
     if (strpbrk(name, "./ \t\n"))
         return rb_errf(err, RB_E_INVALID, "bad layer name '%s': no '.', '/' or spaces", name);
     rb_strlcpy(l.name, name, sizeof(l.name));
-    l.channel_count = 3;
-    if (!strcmp(name, "normal")) {
-        suffixes = xyz;
-    } else if (!strcmp(name, "depth")) {
-        suffixes = z;
-        l.channel_count = 1;
-    } else if (!strcmp(name, "motion")) {
-        suffixes = xy;
-        l.channel_count = 2;
-    }
+    /* A layer the renderer writes has its channels (rb_layer_channel); any other is RGB. */
+    uint32_t known = 0;
+    while (known < RB_LAYER_COUNT && strcmp(name, rb_layer_name((enum rb_layer)known)))
+        known++;
+    l.channel_count = known < RB_LAYER_COUNT ? rb_layer_width((enum rb_layer)known) : 3;
     bool is_beauty = !strcmp(name, "beauty");
     for (uint32_t c = 0; c < l.channel_count; c++)
         snprintf(l.channels[c], sizeof(l.channels[c]), "%s%s%s", is_beauty ? "" : name,
-                 is_beauty ? "" : ".", suffixes[c]);
+                 is_beauty ? "" : ".",
+                 known < RB_LAYER_COUNT ? rb_layer_channel((enum rb_layer)known, c) : rgb[c]);
     *out = l;
     return RB_OK;
 }

@@ -218,16 +218,24 @@ enum rb_layer {
      * so that the bits (and job hashes) of the layers before them stay as they were. */
     RB_LAYER_INDIRECT_DIFFUSE,  /* RGB */
     RB_LAYER_INDIRECT_SPECULAR, /* RGB */
+    /* How the pixel was sampled, per lobe (diffuse, specular): the samples its light averages
+     * and whether the adaptive tile mask stops its rays. The hybrid integrator's (and the
+     * reference's fixed count); after the others for the same reason. */
+    RB_LAYER_SAMPLES, /* diffuse, specular */
+    RB_LAYER_TILES,   /* diffuse, specular */
     RB_LAYER_COUNT,
 };
 #define RB_LAYERS_ALL ((1u << RB_LAYER_COUNT) - 1u)
 /* The packed pixel of a layer mask: the beauty's 4 floats, then each layer in the mask, in
  * order, the whole rounded up to a multiple of 4 floats (16 bytes). With every layer this is
- * the RB_OUT_* layout of shaders/common/shared.h (28 floats). */
+ * the RB_OUT_* layout of shaders/common/shared.h (32 floats). */
 uint32_t rb_layer_width(enum rb_layer layer);
 uint32_t rb_layer_offset(uint32_t mask, enum rb_layer layer); /* in floats; for a layer in mask */
 uint32_t rb_layer_stride(uint32_t mask);                      /* floats per pixel */
 const char *rb_layer_name(enum rb_layer layer);               /* "direct", ... */
+/* The EXR name of channel c of a layer, after "<layer>.": "R", "X", "diffuse", ...; NULL past
+ * its width. */
+const char *rb_layer_channel(enum rb_layer layer, uint32_t c);
 
 /* What one frame produced, whichever renderer made it (a GPU integrator or the CPU reference);
  * the library writes it out (EXR layers, sidecars). Pointers are owned by the renderer and valid

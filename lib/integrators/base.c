@@ -129,11 +129,11 @@ bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkComman
 /* The output pass's non-finite counter is its own: it zeroes it, orders that before its shader
  * and makes it visible to the host. */
 void rb_base_record_output(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
-                           const struct rb_gpu_image *light)
+                           const struct rb_gpu_image *light, const struct rb_gpu_image *stats)
 {
     struct rb_frame *frame = &it->frame;
     const struct rb_gpu_image *gb = frame->gbuffer;
-    struct rb_gpu_access output[8 + 1 + RB_BDPT_LIGHT_COUNT] = {
+    struct rb_gpu_access output[8 + 1 + RB_BDPT_LIGHT_COUNT + 1] = {
         {.buffer = &frame->globals, .use = RB_GPU_COMPUTE_UNIFORM},
         {.image = frame->beauty, .use = RB_GPU_COMPUTE_READ},
         {.image = &frame->direct, .use = RB_GPU_COMPUTE_READ},
@@ -147,7 +147,9 @@ void rb_base_record_output(struct rb_integrator *it, struct rb_base *b, VkComman
     uint32_t count = 9;
     for (uint32_t i = 0; light && i < RB_BDPT_LIGHT_COUNT; i++)
         output[count++] = (struct rb_gpu_access){.image = &light[i], .use = RB_GPU_COMPUTE_READ};
+    if (stats)
+        output[count++] = (struct rb_gpu_access){.image = stats, .use = RB_GPU_COMPUTE_READ};
     rb_integrator_pass_begin(it, cmd, "output", output, count);
-    rb_pass_output_record(b->output, cmd, frame, light);
+    rb_pass_output_record(b->output, cmd, frame, light, stats);
     rb_integrator_pass_end(it, cmd);
 }

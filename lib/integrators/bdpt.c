@@ -897,7 +897,7 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
     if (ctx->is_warmup)
         return;
     record_reconstruct(it, d, cmd);
-    rb_base_record_output(it, &d->base, cmd, b->light);
+    rb_base_record_output(it, &d->base, cmd, b->light, NULL);
 }
 
 /* The ray-bundle pool's use, bundle by bundle: the most nodes a bundle asked for, and the

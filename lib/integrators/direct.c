@@ -47,7 +47,7 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
 {
     struct rb_base *d = state;
     if (rb_base_record_direct(it, d, cmd, ctx))
-        rb_base_record_output(it, d, cmd, NULL);
+        rb_base_record_output(it, d, cmd, NULL, NULL);
 }
 
 static void collect(struct rb_integrator *it, void *state, struct rb_frame_result *out)

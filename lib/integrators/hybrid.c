@@ -564,7 +564,7 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
     rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                           VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
                           VK_ACCESS_2_HOST_READ_BIT);
-    rb_base_record_output(it, b, cmd, h->light);
+    rb_base_record_output(it, b, cmd, h->light, &h->stats);
     d->has_counts = true;
 }
 

@@ -149,9 +149,10 @@ bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkComman
  * tools that draw their own views of the frame's world vertices. */
 void rb_base_record_animate(struct rb_integrator *it, struct rb_pass_animate *pass,
                             VkCommandBuffer cmd, const struct rb_frame_slot *cur);
-/* Records output. light: NULL, or the RB_BDPT_LIGHT_COUNT images of gathered light. */
+/* Records output. light: NULL, or the RB_BDPT_LIGHT_COUNT images of gathered light; stats:
+ * NULL, or the hybrid's samples and tile masks (rb_pass_output_record). */
 void rb_base_record_output(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
-                           const struct rb_gpu_image *light);
+                           const struct rb_gpu_image *light, const struct rb_gpu_image *stats);
 
 /* ---- bdpt.c ------------------------------------------------------------------------------ */
 

@@ -109,7 +109,8 @@ static const struct key keys[] = {
     K("layers", KT_STRLIST, JOB(layers), NOLO, NOHI,
       "[direct, indirect, albedo, normal, depth, motion]", 0,
       "the EXR's layers beside the beauty (RGBA): direct, indirect, albedo, normal, depth, "
-      "motion, indirect_diffuse, indirect_specular; only these are read back from the device",
+      "motion, indirect_diffuse, indirect_specular, samples, tiles (hybrid and reference); only "
+      "these are read back from the device",
       .count_offset = JOB(layer_count)),
     K("frames.start", KT_INT, JOB(frame_start), 0, NOHI, "0", 0, "first frame to render"),
     K("frames.end", KT_INT, JOB(frame_end), -1, NOHI, "-1", 0,
@@ -1154,6 +1155,18 @@ static enum rb_status validate(struct ctx *c)
         }
         job->layer_mask |= 1u << l;
     }
+    /* samples and tiles say how the hybrid integrator sampled each pixel (and the reference
+     * its fixed count); direct and bdpt keep no such counts, and a layer of zeros would claim
+     * that they took no samples. */
+    enum rb_integrator_kind kind =
+        job->integrator.name ? job->integrator.name : RB_INTEGRATOR_DIRECT;
+    for (uint32_t l = RB_LAYER_SAMPLES; l <= RB_LAYER_TILES; l++)
+        if ((job->layer_mask & (1u << l)) && kind != RB_INTEGRATOR_HYBRID &&
+            kind != RB_INTEGRATOR_REFERENCE)
+            return fail(c, later_mark(m, "layers", "integrator.name"), RB_E_INVALID,
+                        "layer '%s' is written by the hybrid and reference integrators only, "
+                        "and this job renders with '%s'",
+                        rb_layer_name((enum rb_layer)l), rb_integrator_name(kind));
     struct rb_err why = RB_ERR_INIT;
     if (rb_job_check_output(job->output, job->frame_start, job->frame_end, &why))
         return fail(c, mark_of(m, "output", NULL, &c->root), RB_E_INVALID, "%s", why.msg);

@@ -2,7 +2,8 @@
  * back with a single copy (the order is RB_OUT_* in shaders/common/shared.h), and counts the
  * NaN and infinite values it writes, so none reaches a file unnoticed. With bdpt's gathered
  * light, it textures that light with the diffuse and gray specular maps and adds it (seed 000,
- * B.1 "Output"). */
+ * B.1 "Output"); with the hybrid's sample counts and tile masks, it copies them into the samples
+ * and tiles layers. */
 #include "passes/passes_int.h"
 
 #include <stdlib.h>
@@ -20,7 +21,7 @@ struct rb_pass_output {
 struct band {
     uint32_t first_row, row_count;
     uint32_t layer_mask, floats_per_pixel;
-    uint32_t has_light, pad[3];
+    uint32_t has_light, has_stats, pad[2];
 };
 
 static const struct rb_pass_binding bindings[] = {
@@ -38,6 +39,7 @@ static const struct rb_pass_binding bindings[] = {
     RB_PASS_BIND(RB_BIND_OUTPUT_LIGHT + 1, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_OUTPUT_LIGHT + 2, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_OUTPUT_LIGHT + 3, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_OUTPUT_STATS, STORAGE_IMAGE),
 };
 _Static_assert(COUNT(bindings) == RB_BIND_OUTPUT_COUNT, "output bindings");
 
@@ -74,7 +76,8 @@ enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output *
 }
 
 void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
-                           const struct rb_frame *frame, const struct rb_gpu_image *light)
+                           const struct rb_frame *frame, const struct rb_gpu_image *light,
+                           const struct rb_gpu_image *stats)
 {
     /* The count starts from zero on the device, ordered before the shader's atomic adds. */
     vkCmdFillBuffer(cmd, p->nonfinite.buffer, 0, VK_WHOLE_SIZE, 0);
@@ -96,6 +99,7 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
                             frame->layer_mask,
                             frame->readback_floats,
                             light != NULL,
+                            stats != NULL,
                             {0}};
         struct rb_pass_bindings b = {.pass = &p->pass};
         rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_GLOBALS, &frame->globals);
@@ -117,6 +121,8 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
         for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++) /* unread without light */
             rb_pass_bind_image(&b, RB_BIND_OUTPUT_LIGHT + i,
                                light ? light[i].view : frame->direct.view, VK_NULL_HANDLE);
+        rb_pass_bind_image(&b, RB_BIND_OUTPUT_STATS, stats ? stats->view : frame->direct.view,
+                           VK_NULL_HANDLE); /* unread without stats */
         rb_pass_record_bindings(cmd, &b);
         vkCmdPushConstants(cmd, p->pass.layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0,
                            sizeof(band), &band);

@@ -299,9 +299,12 @@ enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output *
 /* Packs beauty and layers into frame->readback, and counts the NaN and infinite floats among
  * them. light: NULL, or bdpt's RB_BDPT_LIGHT_COUNT images of gathered light (bdpt_shared.h),
  * which it textures with the diffuse and gray specular maps and adds: the direct part to the
- * direct layer, the rest as the indirect layer, both to the beauty. */
+ * direct layer, the rest as the indirect layer, both to the beauty. stats: NULL (the samples
+ * and tiles layers are zero), or the hybrid's per-pixel sample counts (R diffuse, G specular)
+ * and tile masks (B diffuse, A specular), copied into those layers. */
 void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
-                           const struct rb_frame *frame, const struct rb_gpu_image *light);
+                           const struct rb_frame *frame, const struct rb_gpu_image *light,
+                           const struct rb_gpu_image *stats);
 /* After the frame's submit has completed: how many floats the last record wrote to the readback
  * were NaN or infinite (0 for a clean frame). */
 uint32_t rb_pass_output_nonfinite_count(const struct rb_pass_output *p);

@@ -37,7 +37,9 @@
  *   through x1's diffuse or specular lobe alone (x1's BSDF weight split by lobe), summed apart,
  *   so they add up to indirect up to rounding. AOVs from the first hit: albedo (c_diff),
  *   shading normal, view depth, motion (previous minus current pixel position of the same
- *   surface point).
+ *   surface point). samples: the samples taken (the spp reached), in both lobes' channels,
+ *   where the pixel's samples were traced (0 where the centre ray sees the environment);
+ *   tiles: 0, nothing stops early.
  * Samples (sample.c): a pixel's samples are Owen-scrambled Sobol (0,2)-sequences in pairs of
  * dimensions (the pixel position, each vertex's BSDF direction, emitter point, environment
  * direction), padded with independent seeds per frame, pixel and pair; the error falls faster
@@ -860,6 +862,9 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct r
         }
         /* box: the fraction of the pixel's samples that hit a surface */
         o[RB_OUT_BEAUTY + 3] = ref->use_box_filter ? (float)(acc[6] / (double)done) : 1.0f;
+        /* Every path may take either lobe, so both count every sample; no tile ever stops
+         * sampling (tiles stays 0). */
+        o[RB_OUT_SAMPLES + 0] = o[RB_OUT_SAMPLES + 1] = (float)done;
     }
     /* Every float of the result, as the output pass counts them on the GPU. */
     uint32_t nonfinite = 0;

@@ -256,11 +256,7 @@ static enum rb_status write_exr(const struct rb_render *r, const char *path,
 {
     size_t n = (size_t)f->width_px * f->height_px;
     static const char *const rgba[] = {"R", "G", "B", "A"};
-    static const char *const rgb[] = {"R", "G", "B"};
-    static const char *const xyz[] = {"X", "Y", "Z"};
-    static const char *const z[] = {"Z"};
-    static const char *const *const channels[RB_LAYER_COUNT] = {rgb, rgb, rgb, xyz,
-                                                                z,   xyz, rgb, rgb};
+    const char *channels[RB_LAYER_COUNT][4];
     struct rb_io_layer out[1 + RB_LAYER_COUNT];
     uint32_t offset[1 + RB_LAYER_COUNT], layer_count = 0;
     out[layer_count] = (struct rb_io_layer){.channel_count = 4, .channel_names = rgba};
@@ -271,6 +267,8 @@ static enum rb_status write_exr(const struct rb_render *r, const char *path,
         if (!(f->layer_mask & (1u << l)))
             return rb_errf(err, RB_E_INVALID, "'%s': the renderer made no '%s' layer", path,
                            rb_layer_name((enum rb_layer)l));
+        for (uint32_t c = 0; c < rb_layer_width((enum rb_layer)l); c++)
+            channels[l][c] = rb_layer_channel((enum rb_layer)l, c);
         out[layer_count] = (struct rb_io_layer){.name = rb_layer_name((enum rb_layer)l),
                                                 .channel_count = rb_layer_width((enum rb_layer)l),
                                                 .channel_names = channels[l]};

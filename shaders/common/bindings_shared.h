@@ -50,7 +50,8 @@
 #define RB_BIND_OUTPUT_NONFINITE 8 /* one uint, added to */
 #define RB_BIND_OUTPUT_SPECULAR 9  /* the G-buffer's F0: the gray specular map */
 #define RB_BIND_OUTPUT_LIGHT 10    /* RB_BDPT_LIGHT_COUNT images: bdpt's gathered light */
-#define RB_BIND_OUTPUT_COUNT 14
+#define RB_BIND_OUTPUT_STATS 14    /* the hybrid's samples and tile masks (RB_BIND_HYBRID_STATS) */
+#define RB_BIND_OUTPUT_COUNT 15
 
 /* bdpt_bounds.comp: the bounding box of the points the G-buffer sees */
 #define RB_BIND_BDPT_BOUNDS_POSITION 0

@@ -276,4 +276,29 @@ ivec2 rb_hybrid_reproject(ivec2 px, float depth, vec3 n)
     return q;
 }
 
+// The tile mask at a pixel, smoothed by a cubic B-spline across tiles (seed 003: "bicubic tile
+// filtering for stenciling"): a lobe's rays stop where it is at least 0.5. `eroded` reads the
+// mask eroded by one tile, the diffuse lobe's, whose filter is wide. The same as
+// hybrid_trace.comp's tile_done, which decides the requests; the filter writes this one into the
+// tiles layer, and tests/integration/t0452-hybrid-layers.sh checks that the two agree.
+float rb_hybrid_tile_done(ivec2 px, bool eroded)
+{
+    uvec2 tiles_n = (g.size.xy + RB_HYBRID_TILE - 1u) / RB_HYBRID_TILE;
+    uint base = eroded ? tiles_n.x * tiles_n.y : 0u;
+    vec2 tc = (vec2(px) + 0.5) / float(RB_HYBRID_TILE) - 0.5;
+    vec2 i0 = floor(tc);
+    vec2 f = tc - i0;
+    vec4 wx = vec4(pow(1.0 - f.x, 3.0), 3.0 * pow(f.x, 3.0) - 6.0 * f.x * f.x + 4.0,
+                   -3.0 * pow(f.x, 3.0) + 3.0 * f.x * f.x + 3.0 * f.x + 1.0, pow(f.x, 3.0)) / 6.0;
+    vec4 wy = vec4(pow(1.0 - f.y, 3.0), 3.0 * pow(f.y, 3.0) - 6.0 * f.y * f.y + 4.0,
+                   -3.0 * pow(f.y, 3.0) + 3.0 * f.y * f.y + 3.0 * f.y + 1.0, pow(f.y, 3.0)) / 6.0;
+    float s = 0.0;
+    for (int y = 0; y < 4; y++)
+        for (int x = 0; x < 4; x++) {
+            ivec2 t = clamp(ivec2(i0) + ivec2(x - 1, y - 1), ivec2(0), ivec2(tiles_n) - 1);
+            s += wx[x] * wy[y] * tiles[base + uint(t.y) * tiles_n.x + uint(t.x)];
+        }
+    return s;
+}
+
 #endif

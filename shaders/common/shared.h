@@ -90,6 +90,8 @@ struct rb_gpu_shadow_view {
 #define RB_LAYER_MOTION 5u
 #define RB_LAYER_INDIRECT_DIFFUSE 6u
 #define RB_LAYER_INDIRECT_SPECULAR 7u
+#define RB_LAYER_SAMPLES 8u
+#define RB_LAYER_TILES 9u
 #endif
 
 /* A frame's result with every layer: these floats per pixel, in this order (the reference's
@@ -103,6 +105,8 @@ struct rb_gpu_shadow_view {
 #define RB_OUT_MOTION 17   /* XY */
 #define RB_OUT_INDIRECT_DIFFUSE 19  /* RGB */
 #define RB_OUT_INDIRECT_SPECULAR 22 /* RGB */
-#define RB_OUT_FLOATS 28            /* the last three are padding */
+#define RB_OUT_SAMPLES 25           /* diffuse, specular */
+#define RB_OUT_TILES 27             /* diffuse, specular */
+#define RB_OUT_FLOATS 32            /* the last three are padding */
 
 #endif

@@ -467,6 +467,17 @@ static void test_layer_resolve(void **state)
     assert_int_equal(rb_analysis_layer_resolve("motion", &l, &err), RB_OK);
     assert_int_equal(l.channel_count, 2);
     assert_string_equal(l.channels[1], "motion.Y");
+    /* the hybrid's counts: a channel a lobe, named as the renderer writes them */
+    assert_int_equal(rb_analysis_layer_resolve("samples", &l, &err), RB_OK);
+    assert_int_equal(l.channel_count, 2);
+    assert_string_equal(l.channels[0], "samples.diffuse");
+    assert_string_equal(l.channels[1], "samples.specular");
+    assert_int_equal(rb_analysis_layer_resolve("tiles", &l, &err), RB_OK);
+    assert_string_equal(l.channels[1], "tiles.specular");
+    /* a name the renderer does not write is read as RGB */
+    assert_int_equal(rb_analysis_layer_resolve("hits", &l, &err), RB_OK);
+    assert_int_equal(l.channel_count, 3);
+    assert_string_equal(l.channels[0], "hits.R");
     assert_int_equal(rb_analysis_layer_resolve("direct.R", &l, &err), RB_E_INVALID);
     assert_non_null(strstr(err.msg, "'direct.R'"));
 }

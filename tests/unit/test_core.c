@@ -134,8 +134,9 @@ static void test_layers(void **state)
 {
     (void)state;
     static const uint32_t out[RB_LAYER_COUNT] = {
-        RB_OUT_DIRECT, RB_OUT_INDIRECT, RB_OUT_ALBEDO,           RB_OUT_NORMAL,
-        RB_OUT_DEPTH,  RB_OUT_MOTION,   RB_OUT_INDIRECT_DIFFUSE, RB_OUT_INDIRECT_SPECULAR};
+        RB_OUT_DIRECT,  RB_OUT_INDIRECT, RB_OUT_ALBEDO,           RB_OUT_NORMAL,
+        RB_OUT_DEPTH,   RB_OUT_MOTION,   RB_OUT_INDIRECT_DIFFUSE, RB_OUT_INDIRECT_SPECULAR,
+        RB_OUT_SAMPLES, RB_OUT_TILES};
     for (uint32_t l = 0; l < RB_LAYER_COUNT; l++)
         assert_int_equal(rb_layer_offset(RB_LAYERS_ALL, (enum rb_layer)l), out[l]);
     assert_int_equal(rb_layer_stride(RB_LAYERS_ALL), RB_OUT_FLOATS);
@@ -156,6 +157,23 @@ static void test_layers(void **state)
     assert_string_equal(rb_layer_name(RB_LAYER_INDIRECT_SPECULAR), "indirect_specular");
     assert_string_equal(rb_layer_name(RB_LAYER_MOTION), "motion");
     assert_null(rb_layer_name(RB_LAYER_COUNT));
+    /* samples and tiles come after them: two channels each, one a lobe */
+    uint32_t adaptive = 1u << RB_LAYER_SAMPLES | 1u << RB_LAYER_TILES;
+    assert_int_equal(rb_layer_offset(adaptive | parts, RB_LAYER_INDIRECT_SPECULAR), 7);
+    assert_int_equal(rb_layer_offset(adaptive | parts, RB_LAYER_SAMPLES), 10);
+    assert_int_equal(rb_layer_offset(adaptive | parts, RB_LAYER_TILES), 12);
+    assert_int_equal(rb_layer_stride(adaptive | parts), 16);
+    assert_int_equal(rb_layer_stride(adaptive), 8);
+    assert_string_equal(rb_layer_name(RB_LAYER_SAMPLES), "samples");
+    assert_string_equal(rb_layer_name(RB_LAYER_TILES), "tiles");
+    /* the EXR's channel names */
+    assert_string_equal(rb_layer_channel(RB_LAYER_NORMAL, 2), "Z");
+    assert_string_equal(rb_layer_channel(RB_LAYER_MOTION, 1), "Y");
+    assert_null(rb_layer_channel(RB_LAYER_MOTION, 2));
+    assert_string_equal(rb_layer_channel(RB_LAYER_SAMPLES, 0), "diffuse");
+    assert_string_equal(rb_layer_channel(RB_LAYER_TILES, 1), "specular");
+    assert_null(rb_layer_channel(RB_LAYER_TILES, 2));
+    assert_null(rb_layer_channel(RB_LAYER_COUNT, 0));
 }
 
 int main(void)

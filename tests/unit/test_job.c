@@ -651,6 +651,37 @@ static void test_key_table(void **state)
     free(buf);
 }
 
+/* samples and tiles: written by the hybrid integrator and the reference; asked of direct or bdpt,
+ * refused at the later of the two keys. */
+static void test_adaptive_layers(void **state)
+{
+    (void)state;
+    const uint32_t both = 1u << RB_LAYER_SAMPLES | 1u << RB_LAYER_TILES;
+    static const char *const ok[] = {"hybrid", "reference"};
+    for (size_t i = 0; i < 2; i++) {
+        char text[128];
+        snprintf(text, sizeof(text),
+                 "scene: empty.gltf\nlayers: [tiles, samples]\n"
+                 "integrator: {name: %s}\n",
+                 ok[i]);
+        struct rb_job *job = must_parse(text, NULL, 0);
+        assert_int_equal(job->layer_mask, both);
+        rb_job_destroy(job);
+    }
+    expect_error("scene: empty.gltf\nintegrator: {name: bdpt}\nlayers: [direct, samples]\n", NULL,
+                 0, RB_E_INVALID,
+                 "job.yaml:3:9: layer 'samples' is written by the hybrid and reference "
+                 "integrators only, and this job renders with 'bdpt'");
+    expect_error("scene: empty.gltf\nlayers: [tiles]\n", NULL, 0, RB_E_INVALID,
+                 "job.yaml:2:9: layer 'tiles' is written by the hybrid and reference integrators "
+                 "only, and this job renders with 'direct'");
+    struct rb_job_override o[] = {{"integrator.name", "bdpt", "--integrator 'bdpt'"}};
+    expect_error("scene: empty.gltf\nlayers: [samples]\nintegrator: {name: hybrid}\n", o, 1,
+                 RB_E_INVALID,
+                 "--integrator 'bdpt': layer 'samples' is written by the hybrid and reference "
+                 "integrators only, and this job renders with 'bdpt'");
+}
+
 static void test_man_page_covers_keys(void **state)
 {
     (void)state;
@@ -686,6 +717,7 @@ int main(void)
         cmocka_unit_test(test_hash),
         cmocka_unit_test(test_integrator_names),
         cmocka_unit_test(test_key_table),
+        cmocka_unit_test(test_adaptive_layers),
         cmocka_unit_test(test_man_page_covers_keys),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
