@@ -116,29 +116,6 @@ uint desired(uint lobe, vec3 c_diff, vec3 f0, float roughness, float direct_lum,
     return uint(max(ceil(spp * w * masking), 1.0));
 }
 
-// The tile mask at a pixel, smoothed by a cubic B-spline across tiles (seed 003: "bicubic tile
-// filtering for stenciling"); `eroded` reads the mask eroded by one tile, for the diffuse lobe,
-// whose filter is wide.
-float tile_done(ivec2 px, bool eroded)
-{
-    uvec2 tiles_n = (g.size.xy + RB_HYBRID_TILE - 1u) / RB_HYBRID_TILE;
-    uint base = eroded ? tiles_n.x * tiles_n.y : 0u;
-    vec2 tc = (vec2(px) + 0.5) / float(RB_HYBRID_TILE) - 0.5;
-    vec2 i0 = floor(tc);
-    vec2 f = tc - i0;
-    vec4 wx = vec4(pow(1.0 - f.x, 3.0), 3.0 * pow(f.x, 3.0) - 6.0 * f.x * f.x + 4.0,
-                   -3.0 * pow(f.x, 3.0) + 3.0 * f.x * f.x + 3.0 * f.x + 1.0, pow(f.x, 3.0)) / 6.0;
-    vec4 wy = vec4(pow(1.0 - f.y, 3.0), 3.0 * pow(f.y, 3.0) - 6.0 * f.y * f.y + 4.0,
-                   -3.0 * pow(f.y, 3.0) + 3.0 * f.y * f.y + 3.0 * f.y + 1.0, pow(f.y, 3.0)) / 6.0;
-    float s = 0.0;
-    for (int y = 0; y < 4; y++)
-        for (int x = 0; x < 4; x++) {
-            ivec2 t = clamp(ivec2(i0) + ivec2(x - 1, y - 1), ivec2(0), ivec2(tiles_n) - 1);
-            s += wx[x] * wy[y] * tiles[base + uint(t.y) * tiles_n.x + uint(t.x)];
-        }
-    return s;
-}
-
 // check_screen: whether the BVH finds the surface the screen trace hit at pixel `hit` (G-buffer
 // point pq, geometric normal ngq, depth): the ray's closest BVH hit must project to that pixel
 // or one beside it and lie on the plane of the G-buffer's surface there, within the thickness.
@@ -185,7 +162,7 @@ void main()
         uint want = desired(lobe, c_diff, spec.rgb, spec.a, rb_lum(imageLoad(direct_light, px).rgb), est);
         // A tile's mask counts only once its accumulator has started: the frame that starts
         // it asks for what every pixel wants, whatever came before.
-        bool done = !fresh && pc.params.x > 0.0 && tile_done(px, lobe == RB_HYBRID_DIFFUSE) >= 0.5;
+        bool done = !fresh && pc.params.x > 0.0 && rb_hybrid_tile_done(px, lobe == RB_HYBRID_DIFFUSE) >= 0.5;
         request = have.w < float(want) && !done;
     }
     float offset = pc.scene.y * pos.w;

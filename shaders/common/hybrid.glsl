@@ -278,9 +278,8 @@ ivec2 rb_hybrid_reproject(ivec2 px, float depth, vec3 n)
 
 // The tile mask at a pixel, smoothed by a cubic B-spline across tiles (seed 003: "bicubic tile
 // filtering for stenciling"): a lobe's rays stop where it is at least 0.5. `eroded` reads the
-// mask eroded by one tile, the diffuse lobe's, whose filter is wide. The same as
-// hybrid_trace.comp's tile_done, which decides the requests; the filter writes this one into the
-// tiles layer, and tests/integration/t0452-hybrid-layers.sh checks that the two agree.
+// mask eroded by one tile, the diffuse lobe's, whose filter is wide. hybrid_trace.comp's
+// requests test it, and the filter writes it into the tiles layer.
 float rb_hybrid_tile_done(ivec2 px, bool eroded)
 {
     uvec2 tiles_n = (g.size.xy + RB_HYBRID_TILE - 1u) / RB_HYBRID_TILE;
