@@ -210,21 +210,7 @@ fi
 # ---- error after 1, 8 and 64 frames -------------------------------------------------------
 
 # The demo room, its animation stopped and its camera still (tests/integration/t0450-hybrid.sh).
-cat >"$out/still.yaml" <<EOT
-scene: $PWD/jobs/demo/room.gltf
-output: frame.####.exr
-resolution: [${still_size%x*}, ${still_size#*x}]
-frames: {start: 0, end: 63, rate: 24}
-camera:
-  fov_y_deg: 40
-  keys:
-    - {t: 0, position: [0, 1.0, 3.6], look_at: [0, 0.9, 0]}
-animation: {clips: ["Demo"], offset_s: 0.5, speed: 0, loop: true}
-lights:
-  - {type: point, position: [0.2, 1.3, 2.6], color: [1.0, 0.95, 0.9], intensity: 1.2}
-layers: [direct, indirect]
-integrator: {name: hybrid, hybrid: {history: 64}}
-EOT
+still_demo "$out/still.yaml" "$still_size" 63 "[direct, indirect]" "{name: hybrid, hybrid: {history: 64}}"
 # The truth is frame 63 of the reference; frame 62, with independent random numbers, says its
 # own noise: the relMSE between the two is about twice either's.
 "$BUILD/raybundle" reference "$out/still.yaml" --frames 62-63 --spp "$truth_spp" \

@@ -1,4 +1,5 @@
 # Helpers of tests/bench.sh and the scripts it runs (sourced; a measurement, never a test).
+. tests/still-demo.sh
 
 # median: the median of the numbers on standard input, one a line.
 median() { sort -g | awk '{ v[++n] = $1 } END { print (n % 2) ? v[(n + 1) / 2] : (v[n / 2] + v[n / 2 + 1]) / 2 }'; }

@@ -1,6 +1,7 @@
 # Shared helpers for the integration scripts (sourced). Each script prints TAP; run from the
 # repository root with BUILD set. rb runs the renderer and keeps its status, stdout and stderr.
 set -u
+. tests/still-demo.sh
 BUILD=${BUILD:-build}
 RB="$BUILD/raybundle"
 T=$(mktemp -d "${TMPDIR:-/tmp}/rbt.XXXXXX")

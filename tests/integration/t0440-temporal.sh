@@ -17,21 +17,8 @@ json() { # json KEY FILE: the first number under KEY
 }
 
 # The demo room, its animation stopped at 0.5 s and its camera still.
-cat >"$T/still.yaml" <<JOB
-scene: $PWD/jobs/demo/room.gltf
-output: still/frame.####.exr
-resolution: [96, 54]
-frames: {start: 0, end: 7, rate: 24}
-camera:
-  fov_y_deg: 40
-  keys:
-    - {t: 0, position: [0, 1.0, 3.6], look_at: [0, 0.9, 0]}
-animation: {clips: ["Demo"], offset_s: 0.5, speed: 0, loop: true}
-lights:
-  - {type: point, position: [0.2, 1.3, 2.6], color: [1.0, 0.95, 0.9], intensity: 1.2}
-layers: [direct, indirect, depth, motion]
-integrator: {name: bdpt, bdpt: {vpls: 16, bundles: 16, vpl_size: 64, bundle_size: 64, rsm_size: 64}}
-JOB
+still_demo "$T/still.yaml" 96x54 7 "[direct, indirect, depth, motion]" \
+    "{name: bdpt, bdpt: {vpls: 16, bundles: 16, vpl_size: 64, bundle_size: 64, rsm_size: 64}}"
 # The same, its animation running three times as fast (the box spins and bobs, the column
 # bends), at 160x90.
 sed 's/speed: 0,/speed: 3,/; s/\[96, 54\]/[160, 90]/' "$T/still.yaml" >"$T/moving.yaml"

@@ -17,21 +17,8 @@ relmse() { # relmse A B LAYER
 }
 
 # The demo room, its animation stopped and its camera still.
-cat >"$T/still.yaml" <<JOB
-scene: $PWD/jobs/demo/room.gltf
-output: still/frame.####.exr
-resolution: [96, 54]
-frames: {start: 0, end: 63, rate: 24}
-camera:
-  fov_y_deg: 40
-  keys:
-    - {t: 0, position: [0, 1.0, 3.6], look_at: [0, 0.9, 0]}
-animation: {clips: ["Demo"], offset_s: 0.5, speed: 0, loop: true}
-lights:
-  - {type: point, position: [0.2, 1.3, 2.6], color: [1.0, 0.95, 0.9], intensity: 1.2}
-layers: [direct, indirect, depth, motion, indirect_diffuse, indirect_specular]
-integrator: {name: hybrid, hybrid: {history: 64}}
-JOB
+still_demo "$T/still.yaml" 96x54 63 "[direct, indirect, depth, motion, indirect_diffuse, indirect_specular]" \
+    "{name: hybrid, hybrid: {history: 64}}"
 
 # ---- passes and ray counts ------------------------------------------------------------------
 

@@ -27,7 +27,8 @@ rb render jobs/demo.yaml --integrator hybrid --size 160x90 --frames 0-3 --out "$
     --set integrator.hybrid.check_screen=true --set integrator.hybrid.rays=2
 expect_exit 0 "4 frames of the demo with the screen check"
 for f in 0000 0003; do
-    set -- $(screen_check "$T/d/frame.$f.timing.json")
+    # shellcheck disable=SC2046 # two numbers; 0 0 when the sidecar has none
+    set -- $(screen_check "$T/d/frame.$f.timing.json") 0 0
     share=$(awk -v c="${1:-0}" -v a="${2:-0}" 'BEGIN { printf "%.4f", c ? a / c : 0 }')
     echo "# frame $f: $2 of $1 screen hits agree with the BVH ($share)"
     check "frame $f: at least 95% of the screen hits agree with the BVH ($share of ${1:-0})" \
@@ -48,7 +49,7 @@ check "without the check the sidecar has no screen_check" \
 ghost='{"name":"Ghost","doubleSided":true,"alphaMode":"MASK","alphaCutoff":0.5,"pbrMetallicRoughness":{"baseColorFactor":[0.8,0.8,0.8,0.1]}}'
 solid='{"name":"Ghost","doubleSided":true,"pbrMetallicRoughness":{"baseColorFactor":[0.8,0.8,0.8,1]}}'
 for v in ghost solid; do
-    eval "m=\$$v"
+    case $v in ghost) m=$ghost ;; *) m=$solid ;; esac
     sed -e 's/"indices":5,"material":0/"indices":5,"material":1/' \
         -e "s/],\"buffers\"/,$m],\"buffers\"/" "$T/plane.gltf" >"$T/$v.gltf"
     sed -e "s/plane.gltf/$v.gltf/" -e 's/position: \[0, 2, 0\]/position: [1.5, 0.5, 0]/' \
@@ -95,6 +96,7 @@ if have_scene cornell-box/CornellBox.glb; then
     # whole run built them at frame 0 and kept them (the box does not move); the bake is a
     # function of the geometry, not of the frame that made it.
     for run in "0-19 w" "16-19 k"; do
+        # shellcheck disable=SC2086 # two words: the frames and the directory
         set -- $run
         rb render "$box" --integrator hybrid --size 32x32 --frames "$1" --out "$T/$2" -q \
             --set integrator.hybrid.history=4

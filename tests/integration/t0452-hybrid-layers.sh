@@ -45,21 +45,7 @@ requested() { sed -n 's/.*"ray_counts": {"requested": \([0-9]*\).*/\1/p' "$1"; }
 
 # The demo room, its animation stopped and its camera still (as t0450); W = 64, so the
 # accumulators start again at frames 0 and 32 only, and every frame here reads the one of frame 0.
-cat >"$T/still.yaml" <<JOB
-scene: $PWD/jobs/demo/room.gltf
-output: still/frame.####.exr
-resolution: [96, 54]
-frames: {start: 0, end: 15, rate: 24}
-camera:
-  fov_y_deg: 40
-  keys:
-    - {t: 0, position: [0, 1.0, 3.6], look_at: [0, 0.9, 0]}
-animation: {clips: ["Demo"], offset_s: 0.5, speed: 0, loop: true}
-lights:
-  - {type: point, position: [0.2, 1.3, 2.6], color: [1.0, 0.95, 0.9], intensity: 1.2}
-layers: [direct, samples, tiles]
-integrator: {name: hybrid, hybrid: {history: 64}}
-JOB
+still_demo "$T/still.yaml" 96x54 15 "[direct, samples, tiles]" "{name: hybrid, hybrid: {history: 64}}"
 small="-q --validate"
 
 # ---- the layers, and growth with no noise target ----------------------------------------------
