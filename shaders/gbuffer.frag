@@ -1,6 +1,6 @@
 // gbuffer: materials and textures to the G-buffer (full precision): position and view depth,
-// shading normal and face, diffuse albedo, specular F0 and roughness, emission and F90, motion
-// vector and geometric normal.
+// shading normal and face, diffuse albedo and triangle, specular F0 and roughness, emission and
+// F90, motion vector and geometric normal.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "bindings_shared.h"
@@ -23,7 +23,7 @@ layout(location = 6) in vec4 i_prev_clip;
 
 layout(location = 0) out vec4 o_position; // world xyz, view depth
 layout(location = 1) out vec4 o_normal;   // shading normal, face (+1 front, -1 back)
-layout(location = 2) out vec4 o_albedo;   // diffuse albedo, coverage
+layout(location = 2) out vec4 o_albedo;   // diffuse albedo, global triangle index
 layout(location = 3) out vec4 o_specular; // F0, roughness
 layout(location = 4) out vec4 o_emission; // emitted radiance, F90
 layout(location = 5) out vec4 o_motion;   // previous minus current pixel position, octahedral Ng
@@ -79,7 +79,9 @@ void main()
 
     o_position = vec4(i_pos, -view_pos.z);
     o_normal = vec4(n, face);
-    o_albedo = vec4(c_diff, 1.0);
+    // The frame draws its whole index buffer at once: the primitive is the global triangle, whose
+    // index a float holds exactly below 2^24 (the hybrid's screen hits look up its baked light).
+    o_albedo = vec4(c_diff, float(gl_PrimitiveID));
     o_specular = vec4(f0, roughness);
     o_emission = vec4(emission, f90);
     o_motion = vec4(prev - cur, rb_oct_encode(ng));

@@ -3,8 +3,8 @@
 // follows from its albedo, its roughness and how much direct light hides its indirect light)
 // and its tile is not done. Each ray samples the lobe with fixed quasi-random numbers of
 // (frame, pixel, lobe, ray) and marches in screen space through the hierarchical depth buffer:
-// a hit is shaded from the G-buffer where it lands (with the baked light of the BVH triangle
-// under it); a ray that leaves the screen, turns toward
+// a hit is shaded from the G-buffer where it lands (with the baked light of the triangle the
+// G-buffer names there); a ray that leaves the screen, turns toward
 // the camera past the near plane, passes behind a surface by more than the thickness, or runs
 // out of steps waits in its slot for the BVH.
 #version 460
@@ -202,9 +202,10 @@ void main()
             if (bvh_agrees(o, l, hit, pq.xyz, ngq, pq.w))
                 atomicAdd(counters.check.y, 1u);
         }
-        vec3 baked = rb_hybrid_baked_at(pq.xyz, ngq, pq.w);
-        vec3 lit = rb_hybrid_shade(pq.xyz, imageLoad(gb_normal, hit).xyz, ngq, -l,
-                                   imageLoad(gb_albedo, hit).rgb, sq.rgb, eq.w, sq.a, baked);
+        vec4 aq = imageLoad(gb_albedo, hit);
+        vec3 baked = rb_hybrid_baked_at(pq.xyz, ngq, pq.w, aq.w);
+        vec3 lit = rb_hybrid_shade(pq.xyz, imageLoad(gb_normal, hit).xyz, ngq, -l, aq.rgb, sq.rgb,
+                                   eq.w, sq.a, baked);
         slots[slot].a = vec4(weight * eq.rgb, uintBitsToFloat(RB_HYBRID_SCREEN));
         slots[slot].b = vec4(weight * lit, 0.0);
     }

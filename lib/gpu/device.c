@@ -16,13 +16,16 @@ static const char *const required_extensions[] = {
 };
 
 /* Vulkan 1.0 features, checked and enabled by name: tessellation for the paraboloid views'
- * curved edges, fragment-stage stores and atomics for the linked-list views. */
+ * curved edges, fragment-stage stores and atomics for the linked-list views, geometry shaders
+ * for gl_PrimitiveID in the G-buffer's fragment shader (SPIR-V's PrimitiveId needs the Geometry
+ * capability there; no geometry shader runs). */
 static const struct {
     size_t offset;
     const char *name;
 } required_features[] = {
     {offsetof(VkPhysicalDeviceFeatures, tessellationShader), "tessellationShader"},
     {offsetof(VkPhysicalDeviceFeatures, fragmentStoresAndAtomics), "fragmentStoresAndAtomics"},
+    {offsetof(VkPhysicalDeviceFeatures, geometryShader), "geometryShader"},
 };
 
 static VkBool32 *feature(VkPhysicalDeviceFeatures *f, size_t i)

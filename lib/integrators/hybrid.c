@@ -55,6 +55,7 @@ struct hybrid {
     struct rb_reference_bake_point *bake_points;
     float *bake_rgb;
     uint32_t bake_capacity;
+    uint32_t word_vec4s; /* the bake words' room, in vec4s (0 without a bake) */
     bool has_bake;
 };
 
@@ -160,7 +161,7 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
                               storage, true, "hybrid.bvh_nodes", &h->bvh_nodes, err)) ||
         (st = rb_frame_buffer(gpu,
                               (uint64_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle) +
-                                  (uint64_t)d->bake_capacity * 16,
+                                  ((uint64_t)d->word_vec4s + d->bake_capacity) * 16,
                               storage, true, "hybrid.bvh_tris", &h->bvh_tris, err)) ||
         (st = rb_frame_buffer(gpu, 2 * tiles * sizeof(float), storage, false, "hybrid.tiles",
                               &h->tiles, err)))
@@ -224,14 +225,16 @@ static enum rb_status bake_init(struct rb_integrator *it, struct hybrid *d, stru
         return RB_OK;
     uint64_t budget = s->bvh_triangles < d->triangle_count ? s->bvh_triangles : d->triangle_count;
     uint64_t cap = (uint64_t)s->bake_texels + 6 * budget;
-    /* the points follow the triangles' room in their buffer, 3 vec4s a triangle */
-    if (3 * budget + cap >= (1ull << (32 - RB_HYBRID_BAKE_SHIFT)))
+    uint64_t words = ((uint64_t)d->triangle_count + 3) / 4;
+    /* the points follow the triangles' room (3 vec4s a triangle) and the words in their buffer */
+    if (3 * budget + words + cap >= (1ull << (32 - RB_HYBRID_BAKE_SHIFT)))
         return rb_errf(err, RB_E_INVALID,
                        "hybrid: %llu baked points (integrator.hybrid.bake_texels %u and the "
                        "vertices of %llu triangles) are more than the %llu the bake can index",
                        (unsigned long long)cap, s->bake_texels, (unsigned long long)budget,
                        (unsigned long long)(1ull << (32 - RB_HYBRID_BAKE_SHIFT)) - 1);
     d->bake_capacity = (uint32_t)cap;
+    d->word_vec4s = (uint32_t)words;
     d->bake_points = malloc((size_t)cap * sizeof(*d->bake_points));
     d->bake_rgb = malloc((size_t)cap * 3 * sizeof(float));
     if (!d->bake_points || !d->bake_rgb)
@@ -352,15 +355,19 @@ static enum rb_status bake(struct rb_integrator *it, struct hybrid *d, struct rb
         }
         h = hi;
     }
+    char *room = d->h.bvh_tris.mapped;
+    uint32_t *words = (uint32_t *)(room + (size_t)d->tri_capacity * sizeof(*bvh->triangles));
+    memset(words, 0, (size_t)d->word_vec4s * 16);
     uint32_t count = 0;
     for (uint32_t k = 0; k < n; k++) {
         struct rb_gpu_bvh_triangle *t = &bvh->triangles[k];
         uint32_t r = lattice_res(edge[k], h), id;
         memcpy(&id, &t->v0[3], sizeof(id));
-        uint32_t first = 3 * d->tri_capacity + count;
+        uint32_t first = 3 * d->tri_capacity + d->word_vec4s + count;
         uint32_t word =
             (first << RB_HYBRID_BAKE_SHIFT) | r | (sides[k] == 2 ? RB_HYBRID_BAKE_BACK : 0);
         memcpy(&t->v2[3], &word, sizeof(word));
+        words[id] = word;
         const float c = 1.0f / 3.0f, shrink = 1.0f - (float)RB_HYBRID_BAKE_SHRINK;
         for (uint32_t s = 0; s < sides[k]; s++)
             for (uint32_t j = 0; j <= r; j++)
@@ -385,8 +392,7 @@ static enum rb_status bake(struct rb_integrator *it, struct hybrid *d, struct rb
                                           d->settings->bake_samples, d->bake_rgb, &rays, err);
     if (st)
         return st;
-    float *dst = (float *)((char *)d->h.bvh_tris.mapped +
-                           (size_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle));
+    float *dst = (float *)(words + (size_t)d->word_vec4s * 4);
     for (uint32_t i = 0; i < count; i++) {
         memcpy(dst + (size_t)i * 4, d->bake_rgb + (size_t)i * 3, 3 * sizeof(float));
         dst[(size_t)i * 4 + 3] = 0.0f;
@@ -485,8 +491,9 @@ static void set_push(const struct rb_integrator *it, struct hybrid *d, int frame
         .sizes = {s->spp, s->screen_steps, d->queue_capacity, d->h.hiz_levels},
         .more = {0, 0, 0, s->filter_radius_px},
         .params = {s->noise, s->thickness, s->filter_depth, s->filter_normal},
-        .scene = {sqrtf(dx * dx + dy * dy + dz * dz), 1e-4f, d->has_bake ? 1.0f : 0.0f,
-                  s->check_screen ? 1.0f : 0.0f},
+        .scene = {sqrtf(dx * dx + dy * dy + dz * dz), 1e-4f, 0.0f, s->check_screen ? 1.0f : 0.0f},
+        /* the G-buffer's float holds a triangle's index exactly below 2^24 */
+        .bake = {d->has_bake, d->triangle_count <= (1u << 24), 12 * d->tri_capacity, 0},
     };
     d->h.cur = (uint32_t)frame & 1u;
 }

@@ -34,7 +34,7 @@ _Static_assert(sizeof(struct rb_gpu_bdpt_emitters_push) == 16, "emitters push co
 _Static_assert(sizeof(struct rb_gpu_bdpt_image_push) == 32, "split/gather/filter push constants");
 _Static_assert(sizeof(struct rb_gpu_hybrid_slot) == 48, "hybrid ray slot layout");
 _Static_assert(sizeof(struct rb_gpu_hybrid_counters) == 64, "hybrid counters layout");
-_Static_assert(sizeof(struct rb_gpu_hybrid_push) == 112, "hybrid push constants");
+_Static_assert(sizeof(struct rb_gpu_hybrid_push) == 128, "hybrid push constants: the least limit");
 _Static_assert(sizeof(struct rb_scene_vertex) == RB_SRC_VERTEX_FLOATS * 4, "source vertex");
 _Static_assert(sizeof(struct rb_scene_morph_delta) == RB_MORPH_DELTA_FLOATS * 4, "morph delta");
 

@@ -36,6 +36,7 @@ layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer BvhTris { rb_g
 // The same buffer as vec4s: the baked points follow the triangles (the push descriptor set has
 // no binding to spare for them).
 layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer Bake { vec4 bake[]; };
+layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer BakeWords { uint bake_words[]; };
 layout(std430, binding = RB_BIND_HYBRID_VERTICES) readonly buffer Verts { rb_gpu_vertex verts[]; };
 layout(std430, binding = RB_BIND_HYBRID_INDICES) readonly buffer Indices { uint indices[]; };
 layout(std430, binding = RB_BIND_HYBRID_MATERIALS) readonly buffer Materials { rb_gpu_material materials[]; };
@@ -236,19 +237,38 @@ vec3 rb_hybrid_face_normal(uint t)
     return cross(p1 - p0, p2 - p0);
 }
 
-// The baked light at a surface point the camera sees (a screen hit): the BVH triangle under the
-// G-buffer's point p, found by a short ray down its geometric normal ng (the side the camera
-// sees), from a thousandth of its depth above to as far below. None when the BVH does not hold
-// the surface there.
-vec3 rb_hybrid_baked_at(vec3 p, vec3 ng, float depth)
+// The baked light at a surface point the camera sees (a screen hit): p is the G-buffer's point,
+// ng its geometric normal (the side the camera sees), tri the G-buffer's triangle index. The
+// triangle's bake word and the point's barycentrics in this frame's vertices find the lattice;
+// past 2^24 triangles, where the G-buffer's float cannot hold the index, a short BVH ray down
+// ng, from a thousandth of the depth above to as far below, finds the triangle instead. None
+// where the BVH does not hold the surface.
+vec3 rb_hybrid_baked_at(vec3 p, vec3 ng, float depth, float tri)
 {
-    if (pc.scene.z == 0.0)
+    if (pc.bake.x == 0u)
         return vec3(0.0);
-    float e = 1e-3 * depth;
-    rb_bvh_hit hit;
-    if (!rb_bvh_intersect(p + ng * e, -ng, 0.0, 2.0 * e, hit))
+    if (pc.bake.y == 0u) {
+        float e = 1e-3 * depth;
+        rb_bvh_hit hit;
+        if (!rb_bvh_intersect(p + ng * e, -ng, 0.0, 2.0 * e, hit))
+            return vec3(0.0);
+        return rb_hybrid_baked(hit.extra, hit.bary,
+                               dot(rb_hybrid_face_normal(hit.triangle), ng) < 0.0);
+    }
+    uint t = uint(tri);
+    uint word = bake_words[pc.bake.z + t];
+    if (word == 0u)
         return vec3(0.0);
-    return rb_hybrid_baked(hit.extra, hit.bary, dot(rb_hybrid_face_normal(hit.triangle), ng) < 0.0);
+    vec3 p0 = verts[indices[3u * t]].position.xyz, p1 = verts[indices[3u * t + 1u]].position.xyz,
+         p2 = verts[indices[3u * t + 2u]].position.xyz;
+    // Barycentrics of p's projection into the triangle's plane.
+    vec3 e1 = p1 - p0, e2 = p2 - p0, q = p - p0;
+    float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2);
+    float q1 = dot(q, e1), q2 = dot(q, e2), det = d11 * d22 - d12 * d12;
+    if (!(det > 0.0))
+        return vec3(0.0);
+    vec2 bary = clamp(vec2(d22 * q1 - d12 * q2, d11 * q2 - d12 * q1) / det, 0.0, 1.0);
+    return rb_hybrid_baked(word, bary, dot(cross(e1, e2), ng) < 0.0);
 }
 
 // The light a surface point sends toward v, but its emission: the punctual lights' direct light

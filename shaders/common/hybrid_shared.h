@@ -63,7 +63,9 @@ struct rb_gpu_hybrid_counters {
 /* The baked light of a BVH triangle (seed 003: "bake direct artificial light"), in the word its
  * v2.w carries: 0 for none, else bits 0-3 its resolution R (1 to 15), bit 4 set when its back
  * is baked too (a double-sided material), bits 5-31 the index of its first point, in vec4s from
- * the start of the BVH's triangle buffer (the points follow the triangles' room there). Its (R + 1)(R + 2) / 2 points sit at barycentrics (i / R, j / R) of its second and
+ * the start of the BVH's triangle buffer. That buffer holds the triangles' room, then each
+ * global triangle's word (0 for one the BVH left out), from uint push.bake.z, for screen hits,
+ * which know their triangle from the G-buffer, then the points. Its (R + 1)(R + 2) / 2 points sit at barycentrics (i / R, j / R) of its second and
  * third vertices, shrunk toward the centroid by RB_HYBRID_BAKE_SHRINK (so no point sits on an
  * edge, where a neighbour's surface would shadow half of it), row j after row j - 1; the back's
  * points follow the front's. Each holds irradiance / pi (what a white Lambertian surface
@@ -81,8 +83,11 @@ struct rb_gpu_hybrid_push {
     RB_UVEC4(level);   /* hiz: level written, its width, height, offset; queue: phase */
     RB_UVEC4(more);    /* hiz: offset of the level read, its width, height; filter radius */
     RB_VEC4(params);   /* noise target, thickness, filter depth stop, filter normal stop */
-    RB_VEC4(scene);    /* scene diagonal, ray offset (fraction of depth), baked light (0/1),
-                        * check_screen (0/1) */
+    RB_VEC4(scene);    /* scene diagonal, ray offset (fraction of depth), unused, check_screen
+                        * (0/1) */
+    RB_UVEC4(bake);    /* baked light (0/1), screen hits find their triangle by the G-buffer's
+                        * index (1) or by a short BVH ray (0), first uint of the per-triangle
+                        * bake words, unused */
 };
 
 #endif
