@@ -3,7 +3,8 @@
 // material at the hit (textures and normal map, at their full resolution), its emission as the camera vertex's direct
 // light, the punctual lights' shadow-mapped light and the triangle's baked light of the
 // emitters and the environment as the bounce; a miss takes the environment.
-// The back of a single-sided surface is an occluder that sends nothing.
+// Both faces of every surface are hit and shaded and emit, as the reference's bounce rays find
+// them; only double-sided materials have their back's light baked.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 
@@ -19,7 +20,7 @@ void main()
         return;
     uint slot = queue[i];
     rb_gpu_hybrid_slot s = slots[slot];
-    vec3 o = s.a.xyz, d = s.b.xyz, weight = s.c.rgb;
+    vec3 o = rb_hybrid_origin(rb_hybrid_slot_pixel(slot)), d = s.a.xyz, weight = s.b.rgb;
     rb_bvh_hit hit;
     if (!rb_bvh_intersect(o, d, 0.0, 1e30, hit)) {
         atomicAdd(counters.more.x, 1u);
@@ -37,23 +38,20 @@ void main()
     vec2 uv = b.x * v0.uv.xy + b.y * v1.uv.xy + b.z * v2.uv.xy;
     rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
     bool front = dot(ng, d) < 0.0;
-    vec3 direct = vec3(0.0), lit = vec3(0.0);
-    if (front || m.specular_color.w > 0.5) {
-        if (!front)
-            ng = -ng;
-        if (dot(n, ng) < 0.0)
-            n = -n;
-        if (m.textures.z >= 0) {
-            vec4 tangent = b.x * v0.tangent + b.y * v1.tangent + b.z * v2.tangent;
-            vec3 tn = textureLod(linear_textures, vec3(uv, float(m.textures.z)), 0.0).xyz;
-            n = rb_normal_map(n, tangent, tn * 2.0 - 1.0, m.emissive.w);
-        }
-        rb_surface sf = rb_material_eval(m, uv, srgb_textures, linear_textures);
-        vec3 p = o + hit.t * d;
-        direct = weight * sf.emission;
-        vec3 baked = rb_hybrid_baked(hit.extra, hit.bary, !front);
-        lit = weight * rb_hybrid_shade(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90, sf.roughness, baked);
+    if (!front)
+        ng = -ng;
+    if (dot(n, ng) < 0.0)
+        n = -n;
+    if (m.textures.z >= 0) {
+        vec4 tangent = b.x * v0.tangent + b.y * v1.tangent + b.z * v2.tangent;
+        vec3 tn = textureLod(linear_textures, vec3(uv, float(m.textures.z)), 0.0).xyz;
+        n = rb_normal_map(n, tangent, tn * 2.0 - 1.0, m.emissive.w);
     }
+    rb_surface sf = rb_material_eval(m, uv, srgb_textures, linear_textures);
+    vec3 p = o + hit.t * d;
+    vec3 direct = weight * sf.emission;
+    vec3 baked = rb_hybrid_baked(hit.extra, hit.bary, !front);
+    vec3 lit = weight * rb_hybrid_shade(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90, sf.roughness, baked);
     slots[slot].a = vec4(direct, uintBitsToFloat(RB_HYBRID_BVH));
     slots[slot].b = vec4(lit, 0.0);
 }

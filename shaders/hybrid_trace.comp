@@ -165,7 +165,6 @@ void main()
         bool done = !fresh && pc.params.x > 0.0 && rb_hybrid_tile_done(px, lobe == RB_HYBRID_DIFFUSE) >= 0.5;
         request = have.w < float(want) && !done;
     }
-    float offset = pc.scene.y * pos.w;
     if (request)
         hiz_levels();
     for (uint r = 0u; r < rays; r++) {
@@ -182,15 +181,14 @@ void main()
             slots[slot].b = vec4(0.0);
             continue;
         }
-        vec3 o = p + ng * offset;
+        vec3 o = rb_hybrid_origin(px);
         ivec2 hit = pc.sizes.y > 0u ? screen_trace(o, l, pc.params.y, pc.sizes.y) : ivec2(-1);
         vec3 ngq = hit.x >= 0 ? rb_oct_decode(imageLoad(gb_motion, hit).zw) : vec3(0.0);
         // The camera sees the hit surface's front; a ray reaching it from behind went behind it.
         if (hit.x < 0 || dot(ngq, l) >= 0.0) {
             atomicAdd(counters.rays.z, 1u);
-            slots[slot].a = vec4(o, uintBitsToFloat(RB_HYBRID_QUEUED));
-            slots[slot].b = vec4(l, 0.0);
-            slots[slot].c = vec4(weight, 0.0);
+            slots[slot].a = vec4(l, uintBitsToFloat(RB_HYBRID_QUEUED));
+            slots[slot].b = vec4(weight, 0.0);
             continue;
         }
         atomicAdd(counters.rays.y, 1u);
@@ -203,9 +201,9 @@ void main()
                 atomicAdd(counters.check.y, 1u);
         }
         vec4 aq = imageLoad(gb_albedo, hit);
-        vec3 baked = rb_hybrid_baked_at(pq.xyz, ngq, pq.w, aq.w);
-        vec3 lit = rb_hybrid_shade(pq.xyz, imageLoad(gb_normal, hit).xyz, ngq, -l, aq.rgb, sq.rgb,
-                                   eq.w, sq.a, baked);
+        vec4 nq = imageLoad(gb_normal, hit);
+        vec3 baked = rb_hybrid_baked_at(pq.xyz, ngq, pq.w, aq.w, nq.w < 0.0);
+        vec3 lit = rb_hybrid_shade(pq.xyz, nq.xyz, ngq, -l, aq.rgb, sq.rgb, eq.w, sq.a, baked);
         slots[slot].a = vec4(weight * eq.rgb, uintBitsToFloat(RB_HYBRID_SCREEN));
         slots[slot].b = vec4(weight * lit, 0.0);
     }

@@ -39,6 +39,7 @@ struct hybrid {
     /* the BVH's inputs: the world vertices of a pose and the frame's triangle list; built: the
      * vertices of the BVH on the device */
     float *positions, *built;
+    uint32_t *bake_words; /* the host's copy of each global triangle's bake word */
     uint32_t *indices;
     uint32_t triangle_count;
     struct rb_bvh_object *objects;
@@ -86,6 +87,7 @@ static void destroy(struct rb_integrator *it, void *state)
     rb_reference_destroy(d->ref);
     free(d->bake_points);
     free(d->bake_rgb);
+    free(d->bake_words);
     free(d->positions);
     free(d->built);
     free(d->indices);
@@ -100,8 +102,9 @@ static enum rb_status geometry_init(struct rb_integrator *it, struct hybrid *d, 
     const struct rb_scene_pose *pose = it->cur.pose;
     uint64_t icount = 0;
     d->indices = rb_frame_world_indices(scene, pose, &icount);
-    d->positions = malloc(((size_t)it->frame.vertex_count + 1) * 3 * sizeof(float));
-    d->built = malloc(((size_t)it->frame.vertex_count + 1) * 3 * sizeof(float));
+    /* positions, then normals (deformed only for the bake) */
+    d->positions = malloc(((size_t)it->frame.vertex_count + 1) * 6 * sizeof(float));
+    d->built = malloc(((size_t)it->frame.vertex_count + 1) * 6 * sizeof(float));
     d->objects = malloc(((size_t)pose->instance_count + 1) * sizeof(*d->objects));
     if (!d->indices || !d->positions || !d->built || !d->objects)
         return rb_errf(err, RB_E_NOMEM, "out of memory for the BVH's %llu triangles",
@@ -115,6 +118,13 @@ static enum rb_status geometry_init(struct rb_integrator *it, struct hybrid *d, 
     }
     d->object_count = pose->instance_count;
     return rb_scene_pose_create(scene, &d->bvh_pose, err);
+}
+
+/* The most triangles the BVH may hold: the budget, or every triangle when it is 0 or larger. */
+static uint64_t bvh_budget(const struct hybrid *d)
+{
+    uint32_t b = d->settings->bvh_triangles;
+    return b && b < d->triangle_count ? b : d->triangle_count;
 }
 
 static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *d,
@@ -140,31 +150,46 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
     uint64_t blocks = (h->slot_count + RB_HYBRID_QUEUE_GROUP - 1) / RB_HYBRID_QUEUE_GROUP;
     uint64_t tiles = (uint64_t)((w + RB_HYBRID_TILE - 1) / RB_HYBRID_TILE) *
                      ((ht + RB_HYBRID_TILE - 1) / RB_HYBRID_TILE);
-    uint64_t budget = s->bvh_triangles < d->triangle_count ? s->bvh_triangles : d->triangle_count;
+    uint64_t budget = bvh_budget(d);
     d->tri_capacity = (uint32_t)(budget ? budget : 1);
-    d->node_capacity = 2 * d->tri_capacity + 1;
+    /* a node holds both children: no more nodes than leaves, so than triangles (a root at
+     * least) */
+    d->node_capacity = d->tri_capacity;
+    /* Every buffer is bound whole: each within maxStorageBufferRange, or a clear error. */
+    const struct {
+        const char *name;
+        uint64_t bytes;
+    } bound[] = {
+        {"hierarchical depth", cells * 2 * sizeof(float)},
+        {"ray slots", h->slot_count * sizeof(struct rb_gpu_hybrid_slot)},
+        {"ray queue", (uint64_t)d->queue_capacity * sizeof(uint32_t)},
+        {"queue blocks", blocks * sizeof(uint32_t)},
+        {"BVH nodes", (uint64_t)d->node_capacity * sizeof(struct rb_gpu_bvh_node)},
+        {"BVH triangles and baked light",
+         (uint64_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle) +
+             ((uint64_t)d->word_vec4s + d->bake_capacity) * 16},
+        {"noise tiles", 2 * tiles * sizeof(float)},
+    };
     enum rb_status st;
-    if ((st = rb_gpu_check_buffer_size(gpu, "hybrid", "ray slots",
-                                       h->slot_count * sizeof(struct rb_gpu_hybrid_slot), err)) ||
-        (st = rb_frame_buffer(gpu, cells * 2 * sizeof(float), storage, false, "hybrid.hiz", &h->hiz,
+    for (size_t i = 0; i < COUNT(bound); i++)
+        if ((st = rb_gpu_check_buffer_size(gpu, "hybrid", bound[i].name, bound[i].bytes, err)) ||
+            (st = rb_gpu_check_storage_range(gpu, "hybrid", bound[i].name, bound[i].bytes, err)))
+            return st;
+    if ((st = rb_frame_buffer(gpu, bound[0].bytes, storage, false, "hybrid.hiz", &h->hiz, err)) ||
+        (st = rb_frame_buffer(gpu, bound[1].bytes, storage, false, "hybrid.slots", &h->slots,
                               err)) ||
-        (st = rb_frame_buffer(gpu, h->slot_count * sizeof(struct rb_gpu_hybrid_slot), storage,
-                              false, "hybrid.slots", &h->slots, err)) ||
         (st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_hybrid_counters),
                               storage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, true,
                               "hybrid.counters", &h->counters, err)) ||
-        (st = rb_frame_buffer(gpu, (uint64_t)d->queue_capacity * sizeof(uint32_t), storage, false,
-                              "hybrid.queue", &h->queue, err)) ||
-        (st = rb_frame_buffer(gpu, blocks * sizeof(uint32_t), storage, false, "hybrid.blocks",
-                              &h->blocks, err)) ||
-        (st = rb_frame_buffer(gpu, (uint64_t)d->node_capacity * sizeof(struct rb_gpu_bvh_node),
-                              storage, true, "hybrid.bvh_nodes", &h->bvh_nodes, err)) ||
-        (st = rb_frame_buffer(gpu,
-                              (uint64_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle) +
-                                  ((uint64_t)d->word_vec4s + d->bake_capacity) * 16,
-                              storage, true, "hybrid.bvh_tris", &h->bvh_tris, err)) ||
-        (st = rb_frame_buffer(gpu, 2 * tiles * sizeof(float), storage, false, "hybrid.tiles",
-                              &h->tiles, err)))
+        (st = rb_frame_buffer(gpu, bound[2].bytes, storage, false, "hybrid.queue", &h->queue,
+                              err)) ||
+        (st = rb_frame_buffer(gpu, bound[3].bytes, storage, false, "hybrid.blocks", &h->blocks,
+                              err)) ||
+        (st = rb_frame_buffer(gpu, bound[4].bytes, storage, true, "hybrid.bvh_nodes", &h->bvh_nodes,
+                              err)) ||
+        (st = rb_frame_buffer(gpu, bound[5].bytes, storage, true, "hybrid.bvh_tris", &h->bvh_tris,
+                              err)) ||
+        (st = rb_frame_buffer(gpu, bound[6].bytes, storage, false, "hybrid.tiles", &h->tiles, err)))
         return st;
     const VkImageUsageFlags image_use = VK_IMAGE_USAGE_STORAGE_BIT;
     static const char *const acc_names[2] = {"hybrid.acc0", "hybrid.acc1"};
@@ -223,7 +248,7 @@ static enum rb_status bake_init(struct rb_integrator *it, struct hybrid *d, stru
     const struct rb_job_hybrid *s = d->settings;
     if (s->bake_samples == 0 || !has_light_to_bake(it))
         return RB_OK;
-    uint64_t budget = s->bvh_triangles < d->triangle_count ? s->bvh_triangles : d->triangle_count;
+    uint64_t budget = bvh_budget(d);
     uint64_t cap = (uint64_t)s->bake_texels + 6 * budget;
     uint64_t words = ((uint64_t)d->triangle_count + 3) / 4;
     /* the points follow the triangles' room (3 vec4s a triangle) and the words in their buffer */
@@ -237,7 +262,8 @@ static enum rb_status bake_init(struct rb_integrator *it, struct hybrid *d, stru
     d->word_vec4s = (uint32_t)words;
     d->bake_points = malloc((size_t)cap * sizeof(*d->bake_points));
     d->bake_rgb = malloc((size_t)cap * 3 * sizeof(float));
-    if (!d->bake_points || !d->bake_rgb)
+    d->bake_words = malloc(((size_t)d->triangle_count + 1) * sizeof(*d->bake_words));
+    if (!d->bake_points || !d->bake_rgb || !d->bake_words)
         return rb_errf(err, RB_E_NOMEM, "out of memory for %llu baked points",
                        (unsigned long long)cap);
     const struct rb_reference_desc desc = {.job = it->job,
@@ -296,13 +322,12 @@ static uint32_t lattice_res(double edge, double h)
     return r < 1.0 ? 1 : r > RB_HYBRID_BAKE_MAX_RES ? RB_HYBRID_BAKE_MAX_RES : (uint32_t)r;
 }
 
-static uint64_t lattice_total(const struct rb_bvh *bvh, const double *edge, const uint8_t *sides,
-                              double h)
+static uint64_t lattice_total(uint32_t n, const double *edge, const uint8_t *sides, double h)
 {
-    uint64_t n = 0;
-    for (uint32_t k = 0; k < bvh->triangle_count; k++)
-        n += (uint64_t)sides[k] * lattice_points(lattice_res(edge[k], h));
-    return n;
+    uint64_t total = 0;
+    for (uint32_t k = 0; k < n; k++)
+        total += (uint64_t)sides[k] * lattice_points(lattice_res(edge[k], h));
+    return total;
 }
 
 static double edge_len(const float a[4], const float b[4])
@@ -313,13 +338,13 @@ static double edge_len(const float a[4], const float b[4])
 
 /* Bakes the emitters' and the environment's light at the lattices of the BVH's triangles (pose
  * of frame epoch) into the device's bake buffer and each triangle's v2.w. The spacing is the
- * finest whose points fit bake_texels (every triangle has at least its three corners' worth). */
+ * finest whose points fit in three a side of every triangle plus bake_texels. */
 static enum rb_status bake(struct rb_integrator *it, struct hybrid *d, struct rb_bvh *bvh,
                            int64_t epoch, struct rb_err *err)
 {
     uint32_t n = bvh->triangle_count;
-    double *edge = malloc(((size_t)n + 1) * sizeof(double));
-    uint8_t *sides = malloc((size_t)n + 1);
+    double *edge = calloc((size_t)n + 1, sizeof(double));
+    uint8_t *sides = calloc((size_t)n + 1, 1);
     if (!edge || !sides) {
         free(edge);
         free(sides);
@@ -341,23 +366,31 @@ static enum rb_status bake(struct rb_integrator *it, struct hybrid *d, struct rb
     }
     /* The finest spacing that fits: bisection between 0 (the finest lattices) and the longest
      * edge (three points a side); the budget never falls below what the coarsest needs. */
-    uint64_t coarsest = lattice_total(bvh, edge, sides, longest);
-    uint64_t cap = d->settings->bake_texels > coarsest ? d->settings->bake_texels : coarsest;
+    uint64_t coarsest = lattice_total(n, edge, sides, longest);
+    uint64_t cap = coarsest + d->settings->bake_texels;
     double h = 0.0;
-    if (lattice_total(bvh, edge, sides, 0.0) > cap) {
+    if (lattice_total(n, edge, sides, 0.0) > cap) {
         double lo = 0.0, hi = longest;
         for (int i = 0; i < 60; i++) {
             double mid = 0.5 * (lo + hi);
-            if (lattice_total(bvh, edge, sides, mid) > cap)
+            if (lattice_total(n, edge, sides, mid) > cap)
                 lo = mid;
             else
                 hi = mid;
         }
         h = hi;
     }
-    char *room = d->h.bvh_tris.mapped;
-    uint32_t *words = (uint32_t *)(room + (size_t)d->tri_capacity * sizeof(*bvh->triangles));
-    memset(words, 0, (size_t)d->word_vec4s * 16);
+    uint64_t total = lattice_total(n, edge, sides, h);
+    if (total > d->bake_capacity) {
+        free(edge);
+        free(sides);
+        return rb_errf(err, RB_E_INVALID,
+                       "hybrid: the bake of frame %lld needs %llu points, more than the %u it was "
+                       "given room for",
+                       (long long)epoch, (unsigned long long)total, d->bake_capacity);
+    }
+    uint32_t *words = d->bake_words;
+    memset(words, 0, (size_t)d->triangle_count * sizeof(*words));
     uint32_t count = 0;
     for (uint32_t k = 0; k < n; k++) {
         struct rb_gpu_bvh_triangle *t = &bvh->triangles[k];
@@ -381,18 +414,17 @@ static enum rb_status bake(struct rb_integrator *it, struct hybrid *d, struct rb
     }
     free(edge);
     free(sides);
-    if (count > d->bake_capacity)
-        return rb_errf(err, RB_E_INVALID,
-                       "hybrid: the bake of frame %lld needs %u points, more than the %u it was "
-                       "given room for",
-                       (long long)epoch, count, d->bake_capacity);
     double start = rb_monotonic_s();
     uint64_t rays = 0;
     enum rb_status st = rb_reference_bake(d->ref, (int)epoch, d->bake_points, count,
                                           d->settings->bake_samples, d->bake_rgb, &rays, err);
     if (st)
         return st;
-    float *dst = (float *)(words + (size_t)d->word_vec4s * 4);
+    /* The device's copy only once the bake has succeeded. */
+    char *room = (char *)d->h.bvh_tris.mapped + (size_t)d->tri_capacity * sizeof(*bvh->triangles);
+    memset(room, 0, (size_t)d->word_vec4s * 16);
+    memcpy(room, words, (size_t)d->triangle_count * sizeof(*words));
+    float *dst = (float *)(room + (size_t)d->word_vec4s * 16);
     for (uint32_t i = 0; i < count; i++) {
         memcpy(dst + (size_t)i * 4, d->bake_rgb + (size_t)i * 3, 3 * sizeof(float));
         dst[(size_t)i * 4 + 3] = 0.0f;
@@ -409,10 +441,13 @@ static enum rb_status build_bvh(struct rb_integrator *it, struct hybrid *d, int6
                                 struct rb_err *err)
 {
     rb_scene_evaluate(it->scene, &it->sel, (double)epoch / it->job->rate_fps, d->bvh_pose);
-    rb_scene_deform(it->scene, d->bvh_pose, d->positions, 3, NULL, NULL, NULL);
+    size_t v = it->frame.vertex_count;
+    rb_scene_deform(it->scene, d->bvh_pose, d->positions, 3, d->ref ? d->positions + v * 3 : NULL,
+                    NULL, NULL);
     /* The build is a function of the vertices alone (the triangles, objects and budget do not
-     * change): a pose that did not move them keeps the BVH the device has. */
-    size_t bytes = (size_t)it->frame.vertex_count * 3 * sizeof(float);
+     * change), the bake of their positions and normals: a pose that did not move them keeps the
+     * BVH the device has. */
+    size_t bytes = v * (d->ref ? 6 : 3) * sizeof(float);
     if (d->has_bvh && memcmp(d->positions, d->built, bytes) == 0) {
         d->bvh_epoch = epoch;
         return RB_OK;

@@ -32,7 +32,7 @@ _Static_assert(sizeof(struct rb_gpu_bdpt_connect_push) == 80, "connect push cons
 _Static_assert(sizeof(struct rb_gpu_bdpt_bounce_push) == 32, "bounce push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_emitters_push) == 16, "emitters push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_image_push) == 32, "split/gather/filter push constants");
-_Static_assert(sizeof(struct rb_gpu_hybrid_slot) == 48, "hybrid ray slot layout");
+_Static_assert(sizeof(struct rb_gpu_hybrid_slot) == 32, "hybrid ray slot layout");
 _Static_assert(sizeof(struct rb_gpu_hybrid_counters) == 64, "hybrid counters layout");
 _Static_assert(sizeof(struct rb_gpu_hybrid_push) == 128, "hybrid push constants: the least limit");
 _Static_assert(sizeof(struct rb_scene_vertex) == RB_SRC_VERTEX_FLOATS * 4, "source vertex");

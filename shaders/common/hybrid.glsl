@@ -86,6 +86,21 @@ uint rb_hybrid_slot(uint lobe, uint ray, ivec2 px)
     return ((lobe * pc.frame.y + ray) * g.size.y + uint(px.y)) * g.size.x + uint(px.x);
 }
 
+// The pixel of a slot.
+ivec2 rb_hybrid_slot_pixel(uint slot)
+{
+    return ivec2(slot % g.size.x, (slot / g.size.x) % g.size.y);
+}
+
+// Where a pixel's rays start: its G-buffer point moved off the surface along the geometric
+// normal, by a fraction of its depth. The trace and the BVH pass both compute it here, so a
+// queued ray need not carry it.
+vec3 rb_hybrid_origin(ivec2 px)
+{
+    vec4 pos = imageLoad(gb_position, px);
+    return pos.xyz + rb_oct_decode(imageLoad(gb_motion, px).zw) * (pc.scene.y * pos.w);
+}
+
 // A 32-bit integer hash (Wang's), for each pixel's and lobe's rotation of the sequence.
 uint rb_hash(uint x)
 {
@@ -229,21 +244,15 @@ vec3 rb_hybrid_baked(uint word, vec2 bary, bool back)
            (1.0 - f.y) * bake[rb_bake_point(base, r, i0.x + 1u, i0.y)].rgb;
 }
 
-// The winding normal of global triangle t, in this frame's vertices.
-vec3 rb_hybrid_face_normal(uint t)
-{
-    vec3 p0 = verts[indices[3u * t]].position.xyz, p1 = verts[indices[3u * t + 1u]].position.xyz,
-         p2 = verts[indices[3u * t + 2u]].position.xyz;
-    return cross(p1 - p0, p2 - p0);
-}
-
 // The baked light at a surface point the camera sees (a screen hit): p is the G-buffer's point,
-// ng its geometric normal (the side the camera sees), tri the G-buffer's triangle index. The
+// ng its geometric normal (the side the camera sees), tri the G-buffer's triangle index, back
+// whether the camera sees the triangle's back (the G-buffer's face: the bake's sides follow the
+// winding, whatever the vertex normals say). The
 // triangle's bake word and the point's barycentrics in this frame's vertices find the lattice;
 // past 2^24 triangles, where the G-buffer's float cannot hold the index, a short BVH ray down
 // ng, from a thousandth of the depth above to as far below, finds the triangle instead. None
 // where the BVH does not hold the surface.
-vec3 rb_hybrid_baked_at(vec3 p, vec3 ng, float depth, float tri)
+vec3 rb_hybrid_baked_at(vec3 p, vec3 ng, float depth, float tri, bool back)
 {
     if (pc.bake.x == 0u)
         return vec3(0.0);
@@ -252,8 +261,7 @@ vec3 rb_hybrid_baked_at(vec3 p, vec3 ng, float depth, float tri)
         rb_bvh_hit hit;
         if (!rb_bvh_intersect(p + ng * e, -ng, 0.0, 2.0 * e, hit))
             return vec3(0.0);
-        return rb_hybrid_baked(hit.extra, hit.bary,
-                               dot(rb_hybrid_face_normal(hit.triangle), ng) < 0.0);
+        return rb_hybrid_baked(hit.extra, hit.bary, back);
     }
     uint t = uint(tri);
     uint word = bake_words[pc.bake.z + t];
@@ -268,7 +276,7 @@ vec3 rb_hybrid_baked_at(vec3 p, vec3 ng, float depth, float tri)
     if (!(det > 0.0))
         return vec3(0.0);
     vec2 bary = clamp(vec2(d22 * q1 - d12 * q2, d11 * q2 - d12 * q1) / det, 0.0, 1.0);
-    return rb_hybrid_baked(word, bary, dot(cross(e1, e2), ng) < 0.0);
+    return rb_hybrid_baked(word, bary, back);
 }
 
 // The light a surface point sends toward v, but its emission: the punctual lights' direct light

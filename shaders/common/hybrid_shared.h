@@ -22,15 +22,15 @@
 #define RB_HYBRID_DROPPED 5u /* queued when the queue was full: not a sample */
 #define RB_HYBRID_ABSORBED 6u /* sampled below the surface: a sample of nothing */
 
-/* One ray slot. While the ray waits for the BVH: a.xyz its origin, b.xyz its direction, c.rgb
- * the estimator's weight (BRDF x cosine / pdf, untextured as the output pass expects). Once
- * shaded, what it brings the pixel, weighted, split as the layers are: a.rgb the emission or
- * environment it found (direct light of the camera vertex), b.rgb the light its hit reflects
- * (one indirect bounce). */
+/* One ray slot, 32 bytes (at 1920x1080 a ray a lobe's fit lavapipe's 128 MiB storage range).
+ * While the ray waits for the BVH: a.xyz its direction, b.rgb the estimator's weight (BRDF x
+ * cosine / pdf, untextured as the output pass expects); its origin is its pixel's, recomputed
+ * (rb_hybrid_origin). Once shaded, what it brings the pixel, weighted, split as the layers are:
+ * a.rgb the emission or environment it found (direct light of the camera vertex), b.rgb the
+ * light its hit reflects (one indirect bounce). */
 struct rb_gpu_hybrid_slot {
     RB_VEC4(a); /* w: state, float bits of RB_HYBRID_* */
     RB_VEC4(b);
-    RB_VEC4(c);
 };
 
 /* Layers of an accumulator image: two sets (A, B) of four, then the frame's geometry. Set s's
@@ -52,8 +52,7 @@ struct rb_gpu_hybrid_counters {
     RB_UVEC4(dispatch); /* x, y, z workgroups of the BVH pass */
 };
 
-/* Workgroup size of the queue's passes and of the BVH pass; the queue scan handles up to
- * RB_HYBRID_SCAN_BLOCKS blocks of RB_HYBRID_QUEUE_GROUP slots. */
+/* Workgroup size of the queue's passes (a block of slots each) and of the BVH pass. */
 #define RB_HYBRID_QUEUE_GROUP 256u
 #define RB_HYBRID_BVH_GROUP 64u
 

@@ -37,6 +37,29 @@ done
 check "without the check the sidecar has no screen_check" \
     sh -c "rm -rf '$T/n' && '$RB' render jobs/demo.yaml --integrator hybrid --size 32x18 --frames 0 --out '$T/n' -q >/dev/null && ! grep -q screen_check '$T/n/frame.0000.timing.json'"
 
+# ---- budgets and limits ----------------------------------------------------------------------
+
+# A BVH budget of 0 holds every object: the demo's frames have the default budget's bits (2
+# million triangles, more than the demo has).
+for b in 0 2000000; do
+    rb render jobs/demo.yaml --integrator hybrid --size 64x36 --frames 0-1 --out "$T/b$b" -q \
+        --set integrator.hybrid.bvh_triangles=$b
+    expect_exit 0 "the demo with a BVH budget of $b triangles"
+done
+check "a BVH budget of 0 gives the whole scene's bits" same "$T/b0/frame.0001.exr" "$T/b2000000/frame.0001.exr"
+# Ray slots past the device's storage range are refused before anything renders, naming the
+# buffer and the limit (lavapipe's 128 MiB: 1920x1080 holds one ray a lobe, not two).
+if grep -q llvmpipe "$T/b0/frame.0000.timing.json"; then
+    rb render jobs/demo.yaml --integrator hybrid --size 1920x1080 --frames 0 --out "$T/big" -q \
+        --set integrator.hybrid.rays=2
+    expect_exit 2 "2 rays a lobe at 1920x1080 on lavapipe are refused"
+    stderr_has "storage buffer 'ray slots' binds 265420800 bytes, more than the device's maxStorageBufferRange" \
+        "the refusal names the ray slots, their size and the limit"
+    check "nothing was written" test ! -e "$T/big/frame.0000.exr"
+else
+    skip "the storage-range refusal" "the device is not lavapipe, whose 128 MiB range it needs"
+fi
+
 # ---- alpha masks: the BVH passes what the G-buffer discards ----------------------------------
 
 # t0040's floor and occluder quad, the quad given a material of its own: masked out entirely
