@@ -71,8 +71,9 @@ fi
 "$BUILD/tests/tools/analytic" scene "$T" || fail_all "cannot write the analytic scene"
 ghost='{"name":"Ghost","doubleSided":true,"alphaMode":"MASK","alphaCutoff":0.5,"pbrMetallicRoughness":{"baseColorFactor":[0.8,0.8,0.8,0.1]}}'
 solid='{"name":"Ghost","doubleSided":true,"pbrMetallicRoughness":{"baseColorFactor":[0.8,0.8,0.8,1]}}'
-for v in ghost solid; do
-    case $v in ghost) m=$ghost ;; *) m=$solid ;; esac
+single='{"name":"Ghost","doubleSided":false,"pbrMetallicRoughness":{"baseColorFactor":[0.8,0.8,0.8,1]}}'
+for v in ghost solid single; do
+    case $v in ghost) m=$ghost ;; solid) m=$solid ;; *) m=$single ;; esac
     sed -e 's/"indices":5,"material":0/"indices":5,"material":1/' \
         -e "s/],\"buffers\"/,$m],\"buffers\"/" "$T/plane.gltf" >"$T/$v.gltf"
     sed -e "s/plane.gltf/$v.gltf/" -e 's/position: \[0, 2, 0\]/position: [1.5, 0.5, 0]/' \
@@ -86,6 +87,10 @@ ng=$(nonzero "$T/oghost/frame.0003.exr")
 ns=$(nonzero "$T/osolid/frame.0003.exr")
 check "the masked quad sends no light through the BVH ($ng pixels with indirect light)" test "$ng" = 0
 check "the solid quad does ($ns pixels with indirect light)" test "${ns:-0}" -gt 1000
+# The quad's underside is its back: single-sided, the camera above still sees its front, and
+# the floor's rays hit, shade and are lit by its back as the reference's bounce rays are.
+check "a single-sided quad's back lights the floor as a double-sided one's does (same bits)" \
+    same "$T/osolid/frame.0003.exr" "$T/osingle/frame.0003.exr"
 
 # ---- the baked light: the Cornell box -------------------------------------------------------
 
