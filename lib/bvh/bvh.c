@@ -102,9 +102,9 @@ static double double_area(const struct rb_bvh_mesh *m, uint32_t t)
 
 /* Per object while choosing: its usable triangles, its area, whether it is in. */
 struct pick {
-    uint32_t object, valid;
+    uint32_t object, valid, lod_valid;
     double score;
-    bool is_included;
+    bool is_included, is_lod;
 };
 
 static int by_score(const void *a, const void *b)
@@ -283,16 +283,19 @@ enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, 
     const struct rb_bvh_mesh *m = desc->mesh;
     if (!m || (m->triangle_count && (!m->positions || !m->indices)) || m->stride_floats < 3)
         return rb_errf(err, RB_E_INVALID, "BVH: no mesh, or a stride under 3 floats");
-    struct rb_bvh_object whole = {0, m->triangle_count};
+    struct rb_bvh_object whole = {.first_triangle = 0, .triangle_count = m->triangle_count};
     const struct rb_bvh_object *objects = desc->objects ? desc->objects : &whole;
     uint32_t object_count = desc->objects ? desc->object_count : 1;
     for (uint32_t i = 0; i < object_count; i++)
-        if ((uint64_t)objects[i].first_triangle + objects[i].triangle_count > m->triangle_count)
+        if ((uint64_t)objects[i].first_triangle + objects[i].triangle_count > m->triangle_count ||
+            (uint64_t)objects[i].lod_first + objects[i].lod_count > m->triangle_count)
             return rb_errf(
-                err, RB_E_INVALID, "BVH: object %u: triangles %u to %llu past the mesh's %u", i,
-                objects[i].first_triangle,
+                err, RB_E_INVALID,
+                "BVH: object %u: triangles %u to %llu or its coarser %u to %llu past the mesh's %u",
+                i, objects[i].first_triangle,
                 (unsigned long long)objects[i].first_triangle + objects[i].triangle_count,
-                m->triangle_count);
+                objects[i].lod_first,
+                (unsigned long long)objects[i].lod_first + objects[i].lod_count, m->triangle_count);
     for (uint64_t i = 0; i < (uint64_t)m->triangle_count * 3; i++)
         if (m->indices[i] >= m->vertex_count)
             return rb_errf(err, RB_E_INVALID,
@@ -302,7 +305,8 @@ enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, 
     enum rb_status st = RB_OK;
     struct rb_bvh bvh = {.object_count = object_count};
     struct pick *picks = calloc(object_count ? object_count : 1, sizeof(*picks));
-    bool *is_included = calloc(object_count ? object_count : 1, sizeof(*is_included));
+    /* per object: 0 left out, 1 whole, 2 by its coarser version */
+    uint8_t *is_included = calloc(object_count ? object_count : 1, sizeof(*is_included));
     struct RTCBuildPrimitive *prims = NULL;
     struct flat f = {.mesh = m};
     if (!picks || !is_included) {
@@ -321,7 +325,13 @@ enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, 
             area += 0.5 * a;
         }
         bvh.triangles_degenerate += objects[i].triangle_count - valid;
-        picks[i] = (struct pick){.object = i, .valid = valid, .score = valid ? area / valid : 0.0};
+        uint32_t lod_valid = 0;
+        for (uint32_t t = 0; t < objects[i].lod_count; t++)
+            lod_valid += double_area(m, objects[i].lod_first + t) > 0.0;
+        picks[i] = (struct pick){.object = i,
+                                 .valid = valid,
+                                 .lod_valid = lod_valid,
+                                 .score = valid ? area / valid : 0.0};
     }
     qsort(picks, object_count, sizeof(*picks), by_score);
     uint64_t left = desc->triangle_budget ? desc->triangle_budget : UINT64_MAX;
@@ -329,16 +339,21 @@ enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, 
         struct pick *p = &picks[i];
         if (p->valid <= left) {
             p->is_included = true;
-            left -= p->valid;
-            valid_total += p->valid;
-            bvh.objects_included++;
+        } else if (p->lod_valid > 0 && p->lod_valid <= left) {
+            p->is_included = p->is_lod = true;
+            bvh.objects_simplified++;
         } else {
             bvh.triangles_left_out += p->valid;
+            continue;
         }
+        uint32_t taken = p->is_lod ? p->lod_valid : p->valid;
+        left -= taken;
+        valid_total += taken;
+        bvh.objects_included++;
     }
     /* Back to object order, so the primitives go to Embree in a fixed order. */
     for (uint32_t i = 0; i < object_count; i++)
-        is_included[picks[i].object] = picks[i].is_included;
+        is_included[picks[i].object] = picks[i].is_included ? (picks[i].is_lod ? 2 : 1) : 0;
 
     size_t n = (size_t)valid_total;
     prims = aligned_alloc(32, (n ? n : 1) * sizeof(*prims));
@@ -354,8 +369,11 @@ enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, 
     for (uint32_t i = 0; i < object_count; i++) {
         if (!is_included[i])
             continue;
-        for (uint32_t j = 0; j < objects[i].triangle_count; j++) {
-            uint32_t t = objects[i].first_triangle + j;
+        bool lod = is_included[i] == 2;
+        uint32_t first = lod ? objects[i].lod_first : objects[i].first_triangle;
+        uint32_t count = lod ? objects[i].lod_count : objects[i].triangle_count;
+        for (uint32_t j = 0; j < count; j++) {
+            uint32_t t = first + j;
             if (!(double_area(m, t) > 0.0))
                 continue;
             float tlo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, thi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};

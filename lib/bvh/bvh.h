@@ -25,9 +25,12 @@ struct rb_bvh_mesh {
     uint32_t triangle_count;
 };
 
-/* One instance's triangles, contiguous in the global list. Objects should not overlap. */
+/* One instance's triangles, contiguous in the global list, and optionally a coarser version of
+ * them (seed 003's LOD: a simplified mesh over the same vertices, elsewhere in the list), which
+ * enters in its place when the whole object does not fit. Objects should not overlap. */
 struct rb_bvh_object {
     uint32_t first_triangle, triangle_count;
+    uint32_t lod_first, lod_count; /* lod_count 0: none */
 };
 
 struct rb_bvh_desc {
@@ -46,6 +49,7 @@ struct rb_bvh {
     struct rb_gpu_bvh_triangle *triangles;
     uint32_t triangle_count;
     uint32_t object_count, objects_included;
+    uint32_t objects_simplified;   /* of those included, by their coarser version */
     uint64_t triangles_left_out;   /* of the objects left out by the budget (degenerate ones not
                                     * counted) */
     uint64_t triangles_degenerate; /* zero area or not finite: never in the BVH */
@@ -56,7 +60,8 @@ struct rb_bvh {
 /* Builds the BVH of the objects of desc->mesh. Objects are chosen under desc->triangle_budget
  * by score, the object's world surface area (what it can occlude) over its triangle count (the
  * cost of tracing it), the higher first, ties to the lower index; an object that no longer fits
- * is skipped and later ones still tried. Degenerate triangles (zero area, a coordinate not
+ * enters by its coarser version if it has one that fits, or is skipped, and later ones are still
+ * tried. Degenerate triangles (zero area, a coordinate not
  * finite) are left out and not counted against the budget. No triangles gives a valid BVH that
  * nothing hits. The result depends only on the input, not on Embree's threads or scheduling.
  * *out (released with rb_bvh_release) is written only on success. Fails with RB_E_INVALID for

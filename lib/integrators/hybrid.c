@@ -3,8 +3,10 @@
  *   -> bvh_rays -> accumulate -> tiles -> diffuse_filter -> specular_filter -> output
  * Rasterize what can be rasterized (the G-buffer, shadow maps), sample each lobe of the BRDF at
  * every pixel that still wants samples, trace in screen space first and through a BVH (built on
- * the CPU with Embree's builder, lib/bvh) what the screen cannot answer, shade both kinds of hit
- * alike, accumulate over time and filter with a kernel that shrinks as samples grow.
+ * the CPU with Embree's builder, lib/bvh, from the objects of best score under a triangle budget,
+ * an object that does not fit whole by a coarser version) what the screen cannot answer, shade
+ * both kinds of hit alike, accumulate over time and filter with a kernel that shrinks as samples
+ * grow.
  *
  * History. Two accumulators take every sample; accumulator A starts again on the frames
  * sequence_start + kW, B on sequence_start + kW + W/2 (and both on sequence_start), W =
@@ -41,7 +43,8 @@ struct hybrid {
     float *positions, *built;
     uint32_t *bake_words; /* the host's copy of each global triangle's bake word */
     uint32_t *indices;
-    uint32_t triangle_count;
+    uint32_t triangle_count;     /* the frame's; the G-buffer's triangle indices */
+    uint32_t lod_triangle_count; /* the coarser objects' after them in indices */
     struct rb_bvh_object *objects;
     uint32_t object_count;
     struct rb_scene_pose *bvh_pose;
@@ -72,8 +75,9 @@ static void destroy(struct rb_integrator *it, void *state)
         return;
     struct rb_gpu *gpu = it->gpu;
     struct rb_hybrid_frame *h = &d->h;
-    struct rb_gpu_buffer *bufs[] = {&h->hiz,    &h->slots,     &h->counters, &h->queue,
-                                    &h->blocks, &h->bvh_nodes, &h->bvh_tris, &h->tiles};
+    struct rb_gpu_buffer *bufs[] = {&h->hiz,      &h->slots,  &h->counters,
+                                    &h->queue,    &h->blocks, &h->bvh_nodes,
+                                    &h->bvh_tris, &h->tiles,  &h->indices};
     for (size_t i = 0; i < COUNT(bufs); i++)
         rb_gpu_buffer_release(gpu, bufs[i]);
     for (uint32_t i = 0; i < 2; i++)
@@ -93,6 +97,50 @@ static void destroy(struct rb_integrator *it, void *state)
     free(d->indices);
     free(d->objects);
     free(d);
+}
+
+/* Seed 003's LOD: each object of more than RB_SCENE_SIMPLIFY_MIN_TRIANGLES triangles gets a
+ * coarser version, a quarter of its triangles over the same vertices (meshoptimizer, through
+ * rb_scene_simplify, on the first frame's pose: only the topology is kept), appended to the
+ * triangle list; the BVH takes it when the whole object does not fit the budget. */
+static enum rb_status lod_init(struct rb_integrator *it, struct hybrid *d, struct rb_err *err)
+{
+    uint32_t t_count = d->triangle_count, added = 0;
+    rb_scene_deform(it->scene, it->cur.pose, d->positions, 3, NULL, NULL, NULL);
+    for (uint32_t i = 0; i < d->object_count; i++) {
+        struct rb_bvh_object *o = &d->objects[i];
+        if (o->triangle_count <= RB_SCENE_SIMPLIFY_MIN_TRIANGLES)
+            continue;
+        uint32_t target = o->triangle_count / 4;
+        if (target < RB_SCENE_SIMPLIFY_MIN_TRIANGLES)
+            target = RB_SCENE_SIMPLIFY_MIN_TRIANGLES;
+        uint64_t have = (uint64_t)t_count + added;
+        uint32_t *grown = realloc(d->indices, (have + o->triangle_count) * 3 * sizeof(uint32_t));
+        if (!grown)
+            return rb_errf(err, RB_E_NOMEM, "out of memory for the BVH's coarser objects");
+        d->indices = grown;
+        const struct rb_scene_simplify_mesh mesh = {
+            .positions = d->positions,
+            .stride_bytes = 3 * sizeof(float),
+            .vertex_count = it->frame.vertex_count,
+            .indices = d->indices + (size_t)o->first_triangle * 3,
+            .index_count = o->triangle_count * 3,
+        };
+        struct rb_scene_simplified res;
+        enum rb_status st = rb_scene_simplify(&mesh, target, d->indices + have * 3, &res, err);
+        if (st) {
+            rb_err_prefix(err, "hybrid: the coarser version of object %u", i);
+            return st;
+        }
+        uint32_t n = res.index_count / 3;
+        if (n == 0 || n >= o->triangle_count)
+            continue;
+        o->lod_first = (uint32_t)have;
+        o->lod_count = n;
+        added += n;
+    }
+    d->lod_triangle_count = added;
+    return RB_OK;
 }
 
 /* The scene's triangles as the frame's index buffer lists them, and each instance's range. */
@@ -117,7 +165,16 @@ static enum rb_status geometry_init(struct rb_integrator *it, struct hybrid *d, 
         first += n;
     }
     d->object_count = pose->instance_count;
-    return rb_scene_pose_create(scene, &d->bvh_pose, err);
+    enum rb_status st = rb_scene_pose_create(scene, &d->bvh_pose, err);
+    if (st || !d->settings->bvh_lod)
+        return st;
+    return lod_init(it, d, err);
+}
+
+/* The triangles of the list the BVH chooses from: the frame's, then the coarser objects'. */
+static uint64_t all_triangles(const struct hybrid *d)
+{
+    return (uint64_t)d->triangle_count + d->lod_triangle_count;
 }
 
 /* The most triangles the BVH may hold: the budget, or every triangle when it is 0 or larger. */
@@ -169,6 +226,7 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
          (uint64_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle) +
              ((uint64_t)d->word_vec4s + d->bake_capacity) * 16},
         {"noise tiles", 2 * tiles * sizeof(float)},
+        {"triangles", all_triangles(d) * 3 * sizeof(uint32_t)},
     };
     enum rb_status st;
     for (size_t i = 0; i < COUNT(bound); i++)
@@ -189,8 +247,12 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
                               err)) ||
         (st = rb_frame_buffer(gpu, bound[5].bytes, storage, true, "hybrid.bvh_tris", &h->bvh_tris,
                               err)) ||
-        (st = rb_frame_buffer(gpu, bound[6].bytes, storage, false, "hybrid.tiles", &h->tiles, err)))
+        (st = rb_frame_buffer(gpu, bound[6].bytes, storage, false, "hybrid.tiles", &h->tiles,
+                              err)) ||
+        (st = rb_frame_buffer(gpu, bound[7].bytes ? bound[7].bytes : 4, storage, true,
+                              "hybrid.indices", &h->indices, err)))
         return st;
+    memcpy(h->indices.mapped, d->indices, bound[7].bytes);
     const VkImageUsageFlags image_use = VK_IMAGE_USAGE_STORAGE_BIT;
     static const char *const acc_names[2] = {"hybrid.acc0", "hybrid.acc1"};
     static const char *const light_names[RB_BDPT_LIGHT_COUNT] = {
@@ -250,7 +312,7 @@ static enum rb_status bake_init(struct rb_integrator *it, struct hybrid *d, stru
         return RB_OK;
     uint64_t budget = bvh_budget(d);
     uint64_t cap = (uint64_t)s->bake_texels + 6 * budget;
-    uint64_t words = ((uint64_t)d->triangle_count + 3) / 4;
+    uint64_t words = (all_triangles(d) + 3) / 4;
     /* the points follow the triangles' room (3 vec4s a triangle) and the words in their buffer */
     if (3 * budget + words + cap >= (1ull << (32 - RB_HYBRID_BAKE_SHIFT)))
         return rb_errf(err, RB_E_INVALID,
@@ -262,7 +324,7 @@ static enum rb_status bake_init(struct rb_integrator *it, struct hybrid *d, stru
     d->word_vec4s = (uint32_t)words;
     d->bake_points = malloc((size_t)cap * sizeof(*d->bake_points));
     d->bake_rgb = malloc((size_t)cap * 3 * sizeof(float));
-    d->bake_words = malloc(((size_t)d->triangle_count + 1) * sizeof(*d->bake_words));
+    d->bake_words = malloc(((size_t)all_triangles(d) + 1) * sizeof(*d->bake_words));
     if (!d->bake_points || !d->bake_rgb || !d->bake_words)
         return rb_errf(err, RB_E_NOMEM, "out of memory for %llu baked points",
                        (unsigned long long)cap);
@@ -390,7 +452,7 @@ static enum rb_status bake(struct rb_integrator *it, struct hybrid *d, struct rb
                        (long long)epoch, (unsigned long long)total, d->bake_capacity);
     }
     uint32_t *words = d->bake_words;
-    memset(words, 0, (size_t)d->triangle_count * sizeof(*words));
+    memset(words, 0, (size_t)all_triangles(d) * sizeof(*words));
     uint32_t count = 0;
     for (uint32_t k = 0; k < n; k++) {
         struct rb_gpu_bvh_triangle *t = &bvh->triangles[k];
@@ -406,7 +468,8 @@ static enum rb_status bake(struct rb_integrator *it, struct hybrid *d, struct rb
             for (uint32_t j = 0; j <= r; j++)
                 for (uint32_t i = 0; i + j <= r; i++)
                     d->bake_points[count++] = (struct rb_reference_bake_point){
-                        .triangle = id,
+                        .vertex = {d->indices[(size_t)id * 3], d->indices[(size_t)id * 3 + 1],
+                                   d->indices[(size_t)id * 3 + 2]},
                         .u = c + ((float)i / (float)r - c) * shrink,
                         .v = c + ((float)j / (float)r - c) * shrink,
                         .is_back = s == 1,
@@ -423,7 +486,7 @@ static enum rb_status bake(struct rb_integrator *it, struct hybrid *d, struct rb
     /* The device's copy only once the bake has succeeded. */
     char *room = (char *)d->h.bvh_tris.mapped + (size_t)d->tri_capacity * sizeof(*bvh->triangles);
     memset(room, 0, (size_t)d->word_vec4s * 16);
-    memcpy(room, words, (size_t)d->triangle_count * sizeof(*words));
+    memcpy(room, words, (size_t)all_triangles(d) * sizeof(*words));
     float *dst = (float *)(room + (size_t)d->word_vec4s * 16);
     for (uint32_t i = 0; i < count; i++) {
         memcpy(dst + (size_t)i * 4, d->bake_rgb + (size_t)i * 3, 3 * sizeof(float));
@@ -456,7 +519,7 @@ static enum rb_status build_bvh(struct rb_integrator *it, struct hybrid *d, int6
                                      .stride_floats = 3,
                                      .vertex_count = it->frame.vertex_count,
                                      .indices = d->indices,
-                                     .triangle_count = d->triangle_count};
+                                     .triangle_count = (uint32_t)all_triangles(d)};
     struct rb_bvh bvh = {0};
     enum rb_status st =
         rb_bvh_build(&(struct rb_bvh_desc){.mesh = &mesh,
@@ -478,12 +541,13 @@ static enum rb_status build_bvh(struct rb_integrator *it, struct hybrid *d, int6
     } else if (!d->ref || (st = bake(it, d, &bvh, epoch, err)) == RB_OK) {
         memcpy(d->h.bvh_nodes.mapped, bvh.nodes, bvh.node_count * sizeof(*bvh.nodes));
         memcpy(d->h.bvh_tris.mapped, bvh.triangles, bvh.triangle_count * sizeof(*bvh.triangles));
-        if (bvh.triangles_left_out)
+        if (bvh.triangles_left_out || bvh.objects_simplified)
             rb_log(RB_LOG_INFO,
-                   "hybrid: the BVH holds %u of %u objects (%u triangles); %llu triangles left "
-                   "out by the budget of %u",
+                   "hybrid: the BVH holds %u of %u objects (%u triangles), %u of them by their "
+                   "coarser version; %llu triangles left out by the budget of %u",
                    bvh.objects_included, bvh.object_count, bvh.triangle_count,
-                   (unsigned long long)bvh.triangles_left_out, d->settings->bvh_triangles);
+                   bvh.objects_simplified, (unsigned long long)bvh.triangles_left_out,
+                   d->settings->bvh_triangles);
         d->bvh_epoch = epoch;
         d->has_bvh = true;
         float *t = d->built;
@@ -563,7 +627,7 @@ static void begin(struct rb_integrator *it, struct hybrid *d, VkCommandBuffer cm
         {.buffer = &h->bvh_nodes, .use = rd},
         {.buffer = &h->bvh_tris, .use = rd},
         {.buffer = &ctx->cur->vertices, .use = rd},
-        {.buffer = &frame->indices, .use = rd},
+        {.buffer = &h->indices, .use = rd},
         {.buffer = &frame->materials, .use = rd},
         {.image = &frame->srgb_textures, .use = RB_GPU_COMPUTE_SAMPLED},
         {.image = &frame->linear_textures, .use = RB_GPU_COMPUTE_SAMPLED},

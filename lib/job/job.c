@@ -247,6 +247,8 @@ static const struct key keys[] = {
     K("integrator.hybrid.bvh_triangles", KT_UINT, JOB(integrator.hybrid.bvh_triangles), 0,
       UINT32_MAX, "2000000", 0,
       "hybrid: triangle budget of the BVH, filled with the objects of best score; 0: all"),
+    K("integrator.hybrid.bvh_lod", KT_BOOL, JOB(integrator.hybrid.bvh_lod), NOLO, NOHI, "true", 0,
+      "hybrid: an object over the BVH's budget may enter by a quarter of its triangles"),
     K("integrator.hybrid.bvh_interval", KT_UINT, JOB(integrator.hybrid.bvh_interval), 1, 100000,
       "1", 0, "hybrid: frames between BVH builds (frames that are multiples of it build)"),
     K("integrator.hybrid.bake_texels", KT_UINT, JOB(integrator.hybrid.bake_texels), 0, 1u << 26,
@@ -1345,6 +1347,7 @@ void rb_job_rehash(struct rb_job *job)
         h = h_u32(h, y->screen_steps);
         h = h_u32(h, y->bvh_triangles);
         h = h_u32(h, y->bvh_interval);
+        h = h_u32(h, y->bvh_lod);
         h = h_u32(h, y->bake_texels);
         h = h_u32(h, y->bake_samples);
         h = h_u32(h, y->check_screen); /* the sidecar's screen_check */

@@ -175,6 +175,7 @@ struct rb_job {
             uint32_t screen_steps;     /* most hierarchical depth steps a ray, default 96 */
             uint32_t bvh_triangles;    /* BVH triangle budget, default 2000000 */
             uint32_t bvh_interval;     /* frames between BVH builds, default 1 */
+            bool bvh_lod;              /* coarser objects under the budget, default true */
             uint32_t bake_texels;      /* baked light points past the vertices, 65536 */
             uint32_t bake_samples;     /* light samples a baked point, default 32; 0: none */
             bool check_screen;         /* screen hits traced again through the BVH */

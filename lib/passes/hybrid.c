@@ -126,7 +126,7 @@ static void bind(struct rb_pass *pass, VkCommandBuffer cmd, const struct rb_fram
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_BVH_NODES, &h->bvh_nodes);
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_BVH_TRIS, &h->bvh_tris);
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_VERTICES, &slot->vertices);
-    rb_pass_bind_buffer(&b, RB_BIND_HYBRID_INDICES, &frame->indices);
+    rb_pass_bind_buffer(&b, RB_BIND_HYBRID_INDICES, &h->indices);
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_MATERIALS, &frame->materials);
     rb_pass_bind_image(&b, RB_BIND_HYBRID_SRGB_TEXTURES, frame->srgb_textures.view,
                        gpu->linear_sampler);

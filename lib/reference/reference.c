@@ -719,7 +719,7 @@ struct bake {
 static void bake_point(const struct rb_ref_world *w, const struct rb_reference_bake_point *pt,
                        uint32_t index, uint32_t samples, float out[3], uint64_t *rays)
 {
-    const uint32_t *tri = &w->tris[(size_t)pt->triangle * 3];
+    const uint32_t *tri = pt->vertex;
     const float *p0 = &w->pos[tri[0] * 4], *p1 = &w->pos[tri[1] * 4], *p2 = &w->pos[tri[2] * 4];
     float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
     float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
@@ -742,7 +742,8 @@ static void bake_point(const struct rb_ref_world *w, const struct rb_reference_b
     if (rb_ref_dot(n, ng) < 0.0f)
         for (int c = 0; c < 3; c++)
             n[c] = -n[c];
-    rb_ref_hit_point(w, pt->triangle, pt->u, pt->v, p);
+    for (int c = 0; c < 3; c++)
+        p[c] = b0 * p0[c] + pt->u * p1[c] + pt->v * p2[c];
     double sum[3] = {0.0, 0.0, 0.0};
     for (uint32_t k = 0; k < samples; k++) {
         struct rb_ref_rng rng;
@@ -784,9 +785,10 @@ enum rb_status rb_reference_bake(struct rb_reference *ref, int frame,
         return st;
     }
     for (uint32_t i = 0; i < count; i++)
-        if (points[i].triangle >= ref->tri_count)
-            return rb_errf(err, RB_E_INVALID, "bake point %u: triangle %u of %u", i,
-                           points[i].triangle, ref->tri_count);
+        for (int k = 0; k < 3; k++)
+            if (points[i].vertex[k] >= ref->vertex_count)
+                return rb_errf(err, RB_E_INVALID, "bake point %u: vertex %u of %u", i,
+                               points[i].vertex[k], ref->vertex_count);
     struct bake bk = {
         .ref = ref, .points = points, .count = count, .samples = samples ? samples : 1, .out = out};
     atomic_init(&bk.next, 0u);

@@ -54,11 +54,12 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct r
 
 void rb_reference_destroy(struct rb_reference *ref);
 
-/* A point of the bake: triangle (in the order of the scene's instances, each primitive's index
- * list: lib/integrators/frame.c's world indices) at barycentrics u, v of its second and third
- * vertices, on the side its vertices' winding faces (front) or the other (is_back). */
+/* A point of the bake: on the triangle of world vertices vertex[0..2] (in the order of the
+ * scene's instances, as lib/integrators/frame.c lays them out; any three, so a simplified mesh's
+ * triangles too) at barycentrics u, v of the second and third, on the side their winding faces
+ * (front) or the other (is_back). */
 struct rb_reference_bake_point {
-    uint32_t triangle;
+    uint32_t vertex[3];
     float u, v;
     bool is_back;
 };
@@ -72,7 +73,7 @@ struct rb_reference_bake_point {
  * light sampling alone. Deterministic: the numbers of point i are the reference's of (frame 0,
  * pixel i, sample k) whatever the frame, summed in sample order whatever the threads, so the
  * bake is a function of the points and the frame's geometry alone. rays, if not NULL, gets
- * the shadow rays cast. Fails with RB_E_INVALID for a triangle out of range. */
+ * the shadow rays cast. Fails with RB_E_INVALID for a vertex out of range. */
 enum rb_status rb_reference_bake(struct rb_reference *ref, int frame,
                                  const struct rb_reference_bake_point *points, uint32_t count,
                                  uint32_t samples, float *out, uint64_t *rays, struct rb_err *err);

@@ -252,7 +252,7 @@ static void test_empty_and_degenerate(void **state)
     const uint32_t idx[] = {0, 1, 3, 0, 1, 1, 0, 4, 2, 0, 1, 2, 0, 1, 5};
     struct rb_bvh_mesh m = soup(pos, 6, idx, 5);
     build(&(struct rb_bvh_desc){.mesh = &m,
-                                .objects = (struct rb_bvh_object[]){{0, 4}, {4, 1}},
+                                .objects = (struct rb_bvh_object[]){{0, 4, 0, 0}, {4, 1, 0, 0}},
                                 .object_count = 2,
                                 .triangle_budget = 1},
           &bvh);
@@ -266,7 +266,7 @@ static void test_empty_and_degenerate(void **state)
 
     /* All degenerate: empty, and still a tree to trace. */
     build(&(struct rb_bvh_desc){.mesh = &m,
-                                .objects = (struct rb_bvh_object[]){{0, 3}},
+                                .objects = (struct rb_bvh_object[]){{0, 3, 0, 0}},
                                 .object_count = 1},
           &bvh);
     assert_int_equal(bvh.triangle_count, 0);
@@ -285,11 +285,12 @@ static void test_bad_input(void **state)
     assert_int_equal(rb_bvh_build(&(struct rb_bvh_desc){.mesh = &m}, &bvh, &err), RB_E_INVALID);
     assert_string_equal(err.msg, "BVH: triangle 0: index 3 out of range (3 vertices)");
     m.vertex_count = 4;
-    assert_int_equal(rb_bvh_build(&(struct rb_bvh_desc){.mesh = &m,
-                                                        .objects = (struct rb_bvh_object[]){{1, 1}},
-                                                        .object_count = 1},
-                                  &bvh, &err),
-                     RB_E_INVALID);
+    assert_int_equal(
+        rb_bvh_build(&(struct rb_bvh_desc){.mesh = &m,
+                                           .objects = (struct rb_bvh_object[]){{1, 1, 0, 0}},
+                                           .object_count = 1},
+                     &bvh, &err),
+        RB_E_INVALID);
     assert_non_null(strstr(err.msg, "object 0"));
     assert_int_equal(bvh.node_count, 7); /* untouched */
 }
@@ -303,18 +304,28 @@ static void right_triangle(float *pos, uint32_t *idx, uint32_t t, float a, float
         idx[t * 3 + k] = t * 3 + k;
 }
 
+/* test_budget's and test_lod's triangles: right triangles of these legs, one a plane z = t;
+ * the last is object 0's coarser version in test_lod and unused in test_budget. */
+#define BUDGET_TRIANGLES 7
+static struct rb_bvh_mesh budget_mesh(float pos[BUDGET_TRIANGLES * 9],
+                                      uint32_t idx[BUDGET_TRIANGLES * 3])
+{
+    static const float legs[BUDGET_TRIANGLES][2] = {{2, 1}, {1, 2}, {2, 1}, {4, 2},
+                                                    {1, 1}, {2, 4}, {3, 2}};
+    for (uint32_t t = 0; t < BUDGET_TRIANGLES; t++)
+        right_triangle(pos, idx, t, legs[t][0], legs[t][1], (float)t);
+    return soup(pos, BUDGET_TRIANGLES * 3, idx, BUDGET_TRIANGLES);
+}
+
 static void test_budget(void **state)
 {
     (void)state;
     /* Scores (area / triangles): object 0, three of area 1: 1; object 1, one of area 4: 4;
      * object 2, one of area 0.5: 0.5; object 3, one of area 4: 4 (a tie with object 1). */
-    float pos[6 * 9];
-    uint32_t idx[6 * 3];
-    const float legs[6][2] = {{2, 1}, {1, 2}, {2, 1}, {4, 2}, {1, 1}, {2, 4}};
-    for (uint32_t t = 0; t < 6; t++)
-        right_triangle(pos, idx, t, legs[t][0], legs[t][1], (float)t);
-    struct rb_bvh_mesh m = soup(pos, 18, idx, 6);
-    const struct rb_bvh_object objects[] = {{0, 3}, {3, 1}, {4, 1}, {5, 1}};
+    float pos[BUDGET_TRIANGLES * 9];
+    uint32_t idx[BUDGET_TRIANGLES * 3];
+    struct rb_bvh_mesh m = budget_mesh(pos, idx);
+    const struct rb_bvh_object objects[] = {{0, 3, 0, 0}, {3, 1, 0, 0}, {4, 1, 0, 0}, {5, 1, 0, 0}};
     static const struct {
         uint64_t budget;
         uint32_t included; /* bits by object */
@@ -345,6 +356,47 @@ static void test_budget(void **state)
         assert_int_equal(bvh.triangle_count, count);
         assert_int_equal(bvh.objects_included, __builtin_popcount(cases[c].included));
         assert_int_equal(bvh.object_count, 4);
+        assert_int_equal(bvh.triangles_left_out, cases[c].left_out);
+        rb_bvh_release(&bvh);
+    }
+}
+
+/* A coarser version enters in place of an object that does not fit whole: test_budget's objects,
+ * object 0 (three triangles) with a coarser version of one (triangle 6). Budget 4: objects 1
+ * and 3 (one each), then object 0 by its coarser triangle, then object 2; without the coarser
+ * version object 0 is left out. A coarser version that does not fit either leaves it out. */
+static void test_lod(void **state)
+{
+    (void)state;
+    float pos[BUDGET_TRIANGLES * 9];
+    uint32_t idx[BUDGET_TRIANGLES * 3];
+    struct rb_bvh_mesh m = budget_mesh(pos, idx);
+    const struct rb_bvh_object objects[] = {{0, 3, 6, 1}, {3, 1, 0, 0}, {4, 1, 0, 0}, {5, 1, 0, 0}};
+    static const struct {
+        uint64_t budget;
+        uint32_t triangles; /* bits by triangle */
+        uint32_t simplified;
+        uint64_t left_out;
+    } cases[] = {
+        {0, 0x3f, 0, 0}, /* everything whole */
+        {4, 0x78, 1, 0}, /* 3, 5, then 0 by triangle 6, then 4 */
+        {2, 0x28, 0, 4}, /* 3 and 5; nothing left for 0's coarser version or 2 */
+        {6, 0x3f, 0, 0}, /* whole again */
+    };
+    for (size_t c = 0; c < COUNT(cases); c++) {
+        struct rb_bvh bvh;
+        build(&(struct rb_bvh_desc){.mesh = &m,
+                                    .objects = objects,
+                                    .object_count = 4,
+                                    .triangle_budget = cases[c].budget},
+              &bvh);
+        uint32_t seen = 0;
+        for (uint32_t i = 0; i < bvh.triangle_count; i++)
+            seen |= 1u << word(bvh.triangles[i].v0[3]);
+        print_message("# budget %llu: triangles 0x%x, %u simplified\n",
+                      (unsigned long long)cases[c].budget, seen, bvh.objects_simplified);
+        assert_int_equal(seen, cases[c].triangles);
+        assert_int_equal(bvh.objects_simplified, cases[c].simplified);
         assert_int_equal(bvh.triangles_left_out, cases[c].left_out);
         rb_bvh_release(&bvh);
     }
@@ -462,7 +514,8 @@ static bool world_load(const char *path, struct world *w)
     uint32_t dst = 0, t = 0;
     for (uint32_t i = 0; i < pose->instance_count; i++) {
         const struct rb_scene_primitive *p = &scene->primitives[pose->instances[i].primitive];
-        w->objects[i] = (struct rb_bvh_object){t / 3, p->index_count / 3};
+        w->objects[i] =
+            (struct rb_bvh_object){.first_triangle = t / 3, .triangle_count = p->index_count / 3};
         for (uint32_t j = 0; j < p->index_count / 3 * 3; j++)
             w->tris[t++] = dst + scene->indices[p->first_index + j];
         dst += p->vertex_count;
@@ -770,6 +823,7 @@ int main(void)
         cmocka_unit_test(test_empty_and_degenerate),
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_budget),
+        cmocka_unit_test(test_lod),
         cmocka_unit_test(test_threads),
         cmocka_unit_test(test_threads_scene),
         cmocka_unit_test(test_scenes_against_embree),

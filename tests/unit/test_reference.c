@@ -1237,9 +1237,10 @@ static void test_area_light_ceiling(void **state)
 }
 
 /* rb_reference_bake: the panel's light on a floor 1 m below it, at points across the floor's two
- * triangles, on both sides. The front (up, toward the panel) holds the closed form's E / pi
- * within 2% (Sobol light samples); the back sees nothing. The same bits with 1 and 3 threads; a
- * triangle out of range is refused, and a reference made for baking renders no frame. */
+ * triangles (by their world vertices), on both sides. The front (up, toward the panel) holds the
+ * closed form's E / pi within 2% (Sobol light samples); the back sees nothing. The same bits with 1
+ * and 3 threads; a triangle out of range is refused, and a reference made for baking renders no
+ * frame. */
 static void test_bake(void **state)
 {
     (void)state;
@@ -1273,7 +1274,7 @@ static void test_bake(void **state)
                 if (u + v > 0.95f)
                     u = 0.95f - v;
                 pts[n++] = (struct rb_reference_bake_point){
-                    .triangle = t, .u = u, .v = v, .is_back = side == 1};
+                    .vertex = {0, t + 1, t + 2}, .u = u, .v = v, .is_back = side == 1};
             }
     float out1[N * 3], out3[N * 3];
     struct rb_err err = RB_ERR_INIT;
@@ -1291,7 +1292,7 @@ static void test_bake(void **state)
     const double up[3] = {0, 1, 0};
     double worst = 0.0;
     for (uint32_t i = 0; i < N; i++) {
-        const double(*c)[3] = q[pts[i].triangle];
+        const double(*c)[3] = q[pts[i].vertex[1] - 1];
         double b0 = 1.0 - pts[i].u - pts[i].v, x[3];
         for (int a = 0; a < 3; a++)
             x[a] = b0 * c[0][a] + pts[i].u * c[1][a] + pts[i].v * c[2][a];
@@ -1307,9 +1308,9 @@ static void test_bake(void **state)
     }
     print_message("# baked floor: worst relative error %.4f against the closed form\n", worst);
     assert_true(worst < 0.02);
-    pts[0].triangle = 4;
+    pts[0].vertex[2] = 8;
     assert_int_equal(rb_reference_bake(ref1, 0, pts, N, 4, out1, NULL, &err), RB_E_INVALID);
-    assert_non_null(strstr(err.msg, "triangle 4 of 4"));
+    assert_non_null(strstr(err.msg, "vertex 8 of 8"));
     struct rb_frame_result res;
     assert_int_equal(rb_reference_render(ref1, 0, &res, &err), RB_E_INVALID);
     rb_reference_destroy(ref1);
