@@ -36,26 +36,12 @@ else
 fi
 last=$((frames - 1))
 
-# render JOB DIR OPTION...: raybundle render on the bench's device into DIR.
-render() {
-    render_job=$1 render_dir=$2
-    shift 2
-    [ -z "${RB_BENCH_DEVICE:-}" ] || set -- "$@" --device "$RB_BENCH_DEVICE"
-    "$BUILD/raybundle" render "$render_job" --out "$render_dir" -q "$@" </dev/null >/dev/null
-}
-
 # reference JOB DIR OPTION...: the reference in bdpt's path space into DIR.
 reference() {
     reference_job=$1 reference_dir=$2
     shift 2
     "$BUILD/raybundle" reference "$reference_job" --set integrator.reference.paths=bdpt \
         --out "$reference_dir" -q "$@" </dev/null >/dev/null
-}
-
-# relmse TEST TRUTH [LAYER]: the relative MSE of the image TEST against TRUTH.
-relmse() {
-    "$BUILD/raybundle" compare "$1" "$2" --layer "${3:-beauty}" </dev/null |
-        sed -n 's/^relmse *//p'
 }
 
 # The Cornell box as the classic view frames it, lit by its emissive quad alone.

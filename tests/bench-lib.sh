@@ -27,3 +27,17 @@ pass_medians() {
                printf "%spass %-10s median %8.3f ms gpu%s\n", prefix, p, m,
                    (count[p] > 1 ? sprintf(" (%d a frame)", count[p]) : "") } }'
 }
+
+# render JOB DIR OPTION...: raybundle render on the bench's device into DIR.
+render() {
+    render_job=$1 render_dir=$2
+    shift 2
+    [ -z "${RB_BENCH_DEVICE:-}" ] || set -- "$@" --device "$RB_BENCH_DEVICE"
+    "$BUILD/raybundle" render "$render_job" --out "$render_dir" -q "$@" </dev/null >/dev/null
+}
+
+# relmse TEST TRUTH [LAYER]: the relative MSE of the image TEST against TRUTH.
+relmse() {
+    "$BUILD/raybundle" compare "$1" "$2" --layer "${3:-beauty}" </dev/null |
+        sed -n 's/^relmse *//p'
+}
