@@ -196,6 +196,23 @@ struct rb_mat4 rb_mat4_perspective(float fov_y_rad, float aspect, float z_near, 
 struct rb_mat4 rb_mat4_ortho(float left, float right, float bottom, float top, float z_near,
                              float z_far);
 
+/* Dot and cross products of float[3]s, the CPU shading code's vectors (the reference, the CPU
+ * deformation), in GLSL's order of operations; out may be an input (it is written last). */
+static inline float rb_f3_dot(const float a[3], const float b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static inline void rb_f3_cross(const float a[3], const float b[3], float out[3])
+{
+    float x = a[1] * b[2] - a[2] * b[1];
+    float y = a[2] * b[0] - a[0] * b[2];
+    float z = a[0] * b[1] - a[1] * b[0];
+    out[0] = x;
+    out[1] = y;
+    out[2] = z;
+}
+
 static inline float rb_clampf(float x, float lo, float hi)
 {
     return x < lo ? lo : (x > hi ? hi : x);

@@ -16,20 +16,20 @@ struct brdf_terms {
 static bool brdf_terms(const float n[3], const float v[3], const float l[3], float roughness,
                        struct brdf_terms *t)
 {
-    float ndl = rb_ref_maxf(rb_ref_dot(n, l), 0.0f);
-    float ndv = rb_ref_maxf(rb_ref_dot(n, v), 1e-4f);
+    float ndl = rb_ref_maxf(rb_f3_dot(n, l), 0.0f);
+    float ndv = rb_ref_maxf(rb_f3_dot(n, v), 1e-4f);
     if (ndl <= 0.0f)
         return false;
     float h[3] = {l[0] + v[0], l[1] + v[1], l[2] + v[2]};
-    float hl = sqrtf(rb_ref_dot(h, h));
+    float hl = sqrtf(rb_f3_dot(h, h));
     if (!(hl > 0.0f))
         return false; /* l == -v: no half vector (the GLSL returns zero too) */
     h[0] /= hl;
     h[1] /= hl;
     h[2] /= hl;
-    float ndh = rb_ref_maxf(rb_ref_dot(n, h), 0.0f);
+    float ndh = rb_ref_maxf(rb_f3_dot(n, h), 0.0f);
     /* at most 1 as well: with l close to v, rounding can put it over (see brdf.glsl) */
-    float vdh = rb_ref_minf(rb_ref_maxf(rb_ref_dot(v, h), 0.0f), 1.0f);
+    float vdh = rb_ref_minf(rb_ref_maxf(rb_f3_dot(v, h), 0.0f), 1.0f);
     float a = rb_ref_maxf(roughness * roughness, 1e-4f);
     float a2 = a * a;
     t->ndl = ndl;
@@ -73,9 +73,9 @@ void rb_ref_basis(const float n[3], float t[3], float b[3])
 
 static void to_local(const struct rb_ref_bsdf *b, const float d[3], float out[3])
 {
-    out[0] = rb_ref_dot(d, b->t);
-    out[1] = rb_ref_dot(d, b->b);
-    out[2] = rb_ref_dot(d, b->s->n);
+    out[0] = rb_f3_dot(d, b->t);
+    out[1] = rb_f3_dot(d, b->b);
+    out[2] = rb_f3_dot(d, b->s->n);
 }
 
 static void to_world(const struct rb_ref_bsdf *b, const float d[3], float out[3])
@@ -102,7 +102,7 @@ void rb_ref_bsdf_init(struct rb_ref_bsdf *b, const struct rb_ref_surface *s, con
         b->vs[2] = z;
     }
 
-    float ndv = rb_ref_maxf(rb_ref_dot(s->n, v), 1e-4f);
+    float ndv = rb_ref_maxf(rb_f3_dot(s->n, v), 1e-4f);
     float fw = rb_ref_pow5(1.0f - ndv);
     float F[3];
     for (int i = 0; i < 3; i++)
@@ -121,8 +121,8 @@ void rb_ref_bsdf_init(struct rb_ref_bsdf *b, const struct rb_ref_surface *s, con
 void rb_ref_bsdf_eval(const struct rb_ref_bsdf *b, const float l[3], float out[3])
 {
     const struct rb_ref_surface *s = b->s;
-    float ndl = rb_ref_dot(s->n, l);
-    if (ndl <= 0.0f || rb_ref_dot(s->ng, l) <= 0.0f) {
+    float ndl = rb_f3_dot(s->n, l);
+    if (ndl <= 0.0f || rb_f3_dot(s->ng, l) <= 0.0f) {
         out[0] = out[1] = out[2] = 0.0f;
         return;
     }
@@ -148,10 +148,10 @@ static float smith_g1(float alpha, float cos_v)
 static float spec_pdf(const struct rb_ref_bsdf *b, const float l[3])
 {
     float h[3] = {b->vs[0] + l[0], b->vs[1] + l[1], b->vs[2] + l[2]};
-    float hl = sqrtf(rb_ref_dot(h, h));
+    float hl = sqrtf(rb_f3_dot(h, h));
     if (!(hl > 0.0f))
         return 0.0f;
-    float hz = h[2] / hl, vdh = rb_ref_dot(b->vs, h) / hl;
+    float hz = h[2] / hl, vdh = rb_f3_dot(b->vs, h) / hl;
     if (hz <= 0.0f || vdh <= 0.0f)
         return 0.0f;
     return smith_g1(b->alpha, b->vs[2]) * ggx_d(b->alpha, hz) / (4.0f * b->vs[2]);
@@ -183,7 +183,7 @@ static float sample_weight(const struct rb_ref_bsdf *b, const float l[3], float 
     const struct rb_ref_surface *s = b->s;
     struct brdf_terms t;
     clear_weights(weight, lobe_weight);
-    if (rb_ref_dot(s->ng, l) <= 0.0f || !brdf_terms(s->n, b->v, l, s->roughness, &t))
+    if (rb_f3_dot(s->ng, l) <= 0.0f || !brdf_terms(s->n, b->v, l, s->roughness, &t))
         return rb_ref_bsdf_pdf(b, l);
     float cos = t.ndl;
     float inv_d = RB_PI * t.d * t.d / t.a2; /* 1 / D, finite, 0 where D overflows */
@@ -218,7 +218,7 @@ float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, fl
         /* Heitz 2018, listing 1, isotropic alpha. */
         float a = b->alpha;
         float vh[3] = {a * b->vs[0], a * b->vs[1], b->vs[2]};
-        float len = sqrtf(rb_ref_dot(vh, vh));
+        float len = sqrtf(rb_f3_dot(vh, vh));
         vh[0] /= len;
         vh[1] /= len;
         vh[2] /= len;
@@ -230,7 +230,7 @@ float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, fl
             t1v[1] = vh[0] * inv;
         }
         float t2v[3];
-        rb_ref_cross(vh, t1v, t2v);
+        rb_f3_cross(vh, t1v, t2v);
         float r = sqrtf(u0), phi = 2.0f * RB_PI * u1;
         float t1 = r * cosf(phi), t2 = r * sinf(phi);
         float sh = 0.5f * (1.0f + vh[2]);
@@ -240,14 +240,14 @@ float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, fl
         for (int i = 0; i < 3; i++)
             nh[i] = t1 * t1v[i] + t2 * t2v[i] + tz * vh[i];
         float ne[3] = {a * nh[0], a * nh[1], rb_ref_maxf(nh[2], 0.0f)};
-        float nl = sqrtf(rb_ref_dot(ne, ne));
+        float nl = sqrtf(rb_f3_dot(ne, ne));
         if (!(nl > 0.0f)) {
             clear_weights(weight, lobe_weight);
             return 0.0f;
         }
         for (int i = 0; i < 3; i++)
             ne[i] /= nl;
-        float vdh = rb_ref_dot(b->vs, ne);
+        float vdh = rb_f3_dot(b->vs, ne);
         for (int i = 0; i < 3; i++)
             ll[i] = 2.0f * vdh * ne[i] - b->vs[i];
     } else {
@@ -258,7 +258,7 @@ float rb_ref_bsdf_sample(const struct rb_ref_bsdf *b, float u_lobe, float u0, fl
         ll[2] = sqrtf(rb_ref_maxf(1.0f - u0, 0.0f));
     }
     to_world(b, ll, l);
-    float len = sqrtf(rb_ref_dot(l, l));
+    float len = sqrtf(rb_f3_dot(l, l));
     if (!(len > 0.0f)) {
         clear_weights(weight, lobe_weight);
         return 0.0f;

@@ -42,9 +42,9 @@ void rb_ref_filter(const struct RTCFilterFunctionNArguments *args)
             float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
             float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
             float ng[3];
-            rb_ref_cross(e1, e2, ng);
+            rb_f3_cross(e1, e2, ng);
             float d[3] = {ray_dir(args, 0, i), ray_dir(args, 1, i), ray_dir(args, 2, i)};
-            if (!(rb_ref_dot(ng, d) < 0.0f)) {
+            if (!(rb_f3_dot(ng, d) < 0.0f)) {
                 args->valid[i] = 0;
                 continue;
             }

@@ -18,7 +18,7 @@ float rb_ref_light_falloff(float dist, float range)
 float rb_ref_spot_factor(const float spot_dir[3], const float to_surface[3], float cos_inner,
                          float cos_outer)
 {
-    float cd = rb_ref_dot(spot_dir, to_surface);
+    float cd = rb_f3_dot(spot_dir, to_surface);
     float scale = 1.0f / rb_ref_maxf(1e-3f, cos_inner - cos_outer);
     float t = rb_clampf((cd - cos_outer) * scale, 0.0f, 1.0f);
     return t * t;
@@ -199,7 +199,7 @@ float rb_ref_env_sample(const struct rb_ref_env *env, const float n[3], float u0
         float x = r * cosf(phi), y = r * sinf(phi), z = sqrtf(rb_ref_maxf(1.0f - u0, 0.0f));
         for (int i = 0; i < 3; i++)
             d[i] = x * t[i] + y * b[i] + z * n[i];
-        float len = sqrtf(rb_ref_dot(d, d));
+        float len = sqrtf(rb_f3_dot(d, d));
         for (int i = 0; i < 3; i++)
             d[i] /= len;
         return rb_ref_env_pdf(env, n, d);
@@ -225,7 +225,7 @@ float rb_ref_env_pdf(const struct rb_ref_env *env, const float n[3], const float
     if (env->is_black)
         return 0.0f;
     if (!env->rgba)
-        return rb_ref_maxf(rb_ref_dot(n, d), 0.0f) / RB_PI;
+        return rb_ref_maxf(rb_f3_dot(n, d), 0.0f) / RB_PI;
     float u, v;
     rb_ref_equirect_uv(d, env->rotation_rad, &u, &v);
     if (!(u == u) || !(v == v))

@@ -89,7 +89,7 @@ void rb_ref_emission(const struct rb_ref_world *w, uint32_t prim, float u, float
 
 static bool normalize3(float v[3])
 {
-    float len = sqrtf(rb_ref_dot(v, v));
+    float len = sqrtf(rb_f3_dot(v, v));
     if (!(len > 0.0f))
         return false;
     v[0] /= len;
@@ -144,29 +144,29 @@ void rb_ref_surface_eval(const struct rb_ref_world *w, uint32_t prim, float u, f
     float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
     float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
     float ng[3];
-    rb_ref_cross(e1, e2, ng);
+    rb_f3_cross(e1, e2, ng);
     if (!normalize3(ng)) {
         ng[0] = -dir[0];
         ng[1] = -dir[1];
         ng[2] = -dir[2];
     }
-    s->is_front = rb_ref_dot(ng, dir) < 0.0f;
+    s->is_front = rb_f3_dot(ng, dir) < 0.0f;
     if (!normalize3(nrm))
         for (int c = 0; c < 3; c++)
             nrm[c] = s->is_front ? ng[c] : -ng[c];
     if (!s->is_front)
         for (int c = 0; c < 3; c++)
             nrm[c] = -nrm[c];
-    if (rb_ref_dot(ng, nrm) < 0.0f)
+    if (rb_f3_dot(ng, nrm) < 0.0f)
         for (int c = 0; c < 3; c++)
             ng[c] = -ng[c];
     if (has_tex(w, m->normal_tex)) {
-        float nt = rb_ref_dot(nrm, tan);
+        float nt = rb_f3_dot(nrm, tan);
         float t[3] = {tan[0] - nrm[0] * nt, tan[1] - nrm[1] * nt, tan[2] - nrm[2] * nt};
-        if (rb_ref_dot(t, t) > 1e-12f) {
+        if (rb_f3_dot(t, t) > 1e-12f) {
             normalize3(t);
             float b[3];
-            rb_ref_cross(nrm, t, b);
+            rb_f3_cross(nrm, t, b);
             float hand = tan[3] < 0.0f ? -1.0f : 1.0f;
             float tex[4];
             tex_sample(w, m->normal_tex, uv, false, tex);

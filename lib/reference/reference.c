@@ -432,8 +432,8 @@ static void update_emitters(struct rb_reference *ref)
         float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
         float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
         float c[3];
-        rb_ref_cross(e1, e2, c);
-        float area = 0.5f * sqrtf(rb_ref_dot(c, c));
+        rb_f3_cross(e1, e2, c);
+        float area = 0.5f * sqrtf(rb_f3_dot(c, c));
         const float *em = scene->materials[ref->tri_material[t]].emissive;
         float lum_in[3] = {fmaxf(em[0], 0.0f), fmaxf(em[1], 0.0f), fmaxf(em[2], 0.0f)};
         double power = area > 0.0f && area < INFINITY ? area * rb_ref_luminance(lum_in) : 0.0;
@@ -481,7 +481,7 @@ static enum rb_status prepare_frame(struct rb_reference *ref, int frame, double 
     /* the view axis (-Z of the camera) in world space: row 2 of the view's rotation, negated */
     const struct rb_mat4 *v = &ref->cam.world_to_camera;
     float fwd[3] = {-v->m[0][2], -v->m[1][2], -v->m[2][2]};
-    float len = sqrtf(rb_ref_dot(fwd, fwd));
+    float len = sqrtf(rb_f3_dot(fwd, fwd));
     for (int i = 0; i < 3; i++)
         ref->cam_forward[i] = len > 0.0f ? fwd[i] / len : 0.0f;
 
@@ -542,7 +542,7 @@ static void camera_dir(const struct rb_reference *ref, const struct rb_mat4 *inv
     dir[0] = far.x / far.w - ref->cam.position.x;
     dir[1] = far.y / far.w - ref->cam.position.y;
     dir[2] = far.z / far.w - ref->cam.position.z;
-    float len = sqrtf(rb_ref_dot(dir, dir));
+    float len = sqrtf(rb_f3_dot(dir, dir));
     for (int k = 0; k < 3; k++)
         dir[k] = len > 0.0f ? dir[k] / len : 0.0f;
 }
@@ -552,7 +552,7 @@ static void camera_hit(const struct rb_reference *ref, const float dir[3], struc
                        uint64_t *rays)
 {
     /* The rasterizer clips at the near and far planes, which are view depths. */
-    float cos_fwd = rb_ref_dot(dir, ref->cam_forward);
+    float cos_fwd = rb_f3_dot(dir, ref->cam_forward);
     hit->prim = RB_REF_NONE;
     if (cos_fwd > 0.0f) {
         float org[3] = {ref->cam.position.x, ref->cam.position.y, ref->cam.position.z};
@@ -724,12 +724,12 @@ static void bake_point(const struct rb_ref_world *w, const struct rb_reference_b
     float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
     float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
     float ng[3], n[3], p[3];
-    rb_ref_cross(e1, e2, ng);
+    rb_f3_cross(e1, e2, ng);
     float b0 = 1.0f - pt->u - pt->v;
     for (int c = 0; c < 3; c++)
         n[c] = b0 * w->nrm[tri[0] * 3 + c] + pt->u * w->nrm[tri[1] * 3 + c] +
                pt->v * w->nrm[tri[2] * 3 + c];
-    float lg = sqrtf(rb_ref_dot(ng, ng)), ln = sqrtf(rb_ref_dot(n, n));
+    float lg = sqrtf(rb_f3_dot(ng, ng)), ln = sqrtf(rb_f3_dot(n, n));
     out[0] = out[1] = out[2] = 0.0f;
     if (!(lg > 0.0f) || !(lg < INFINITY))
         return;
@@ -739,7 +739,7 @@ static void bake_point(const struct rb_ref_world *w, const struct rb_reference_b
         ng[c] *= side / lg;
         n[c] = has_n ? n[c] / ln : ng[c];
     }
-    if (rb_ref_dot(n, ng) < 0.0f)
+    if (rb_f3_dot(n, ng) < 0.0f)
         for (int c = 0; c < 3; c++)
             n[c] = -n[c];
     for (int c = 0; c < 3; c++)

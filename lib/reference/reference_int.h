@@ -241,21 +241,6 @@ static inline float rb_ref_pow5(float y)
     return y2 * y2 * y;
 }
 
-static inline float rb_ref_dot(const float a[3], const float b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static inline void rb_ref_cross(const float a[3], const float b[3], float out[3])
-{
-    float x = a[1] * b[2] - a[2] * b[1];
-    float y = a[2] * b[0] - a[0] * b[2];
-    float z = a[0] * b[1] - a[1] * b[0];
-    out[0] = x;
-    out[1] = y;
-    out[2] = z;
-}
-
 static inline float rb_ref_luminance(const float c[3])
 {
     return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];

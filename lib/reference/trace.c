@@ -31,7 +31,7 @@ static bool occluded_toward(const struct rb_ref_world *w, const float org[3], co
                             uint64_t *rays)
 {
     float d[3] = {q[0] - org[0], q[1] - org[1], q[2] - org[2]};
-    float dist = sqrtf(rb_ref_dot(d, d));
+    float dist = sqrtf(rb_f3_dot(d, d));
     if (!(dist > 0.0f))
         return false;
     float l[3] = {d[0] / dist, d[1] / dist, d[2] / dist};
@@ -92,7 +92,7 @@ static void nee_punctual(const struct rb_ref_world *w, const struct rb_ref_surfa
         } else {
             float d[3] = {L->position[0] - s->p[0], L->position[1] - s->p[1],
                           L->position[2] - s->p[2]};
-            dist = sqrtf(rb_ref_dot(d, d));
+            dist = sqrtf(rb_f3_dot(d, d));
             float inv = 1.0f / rb_ref_maxf(dist, 1e-8f);
             l[0] = d[0] * inv;
             l[1] = d[1] * inv;
@@ -103,8 +103,8 @@ static void nee_punctual(const struct rb_ref_world *w, const struct rb_ref_surfa
                 atten *= rb_ref_spot_factor(L->direction, to_surface, L->cos_inner, L->cos_outer);
             }
         }
-        float ndl = rb_ref_dot(s->n, l);
-        if (ndl <= 0.0f || atten <= 0.0f || rb_ref_dot(s->ng, l) <= 0.0f)
+        float ndl = rb_f3_dot(s->n, l);
+        if (ndl <= 0.0f || atten <= 0.0f || rb_f3_dot(s->ng, l) <= 0.0f)
             continue;
         float f[3];
         rb_reference_brdf(s->n, b->v, l, s->c_diff, s->f0, s->f90, s->roughness, f);
@@ -152,8 +152,8 @@ static void face_normal(const struct rb_ref_world *w, uint32_t prim, float n[3])
     const float *p0 = &w->pos[tri[0] * 4], *p1 = &w->pos[tri[1] * 4], *p2 = &w->pos[tri[2] * 4];
     float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
     float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-    rb_ref_cross(e1, e2, n);
-    float len = sqrtf(rb_ref_dot(n, n));
+    rb_f3_cross(e1, e2, n);
+    float len = sqrtf(rb_f3_dot(n, n));
     for (int i = 0; i < 3; i++)
         n[i] = len > 0.0f ? n[i] / len : 0.0f;
 }
@@ -163,7 +163,7 @@ static float face_cos(const struct rb_ref_world *w, uint32_t prim, const float l
 {
     float n[3];
     face_normal(w, prim, n);
-    return fabsf(rb_ref_dot(n, l));
+    return fabsf(rb_f3_dot(n, l));
 }
 
 /* One point on one emissive triangle, chosen by power, then uniformly by area. Direction,
@@ -182,13 +182,13 @@ static void nee_area(const struct rb_ref_world *w, const struct rb_ref_surface *
     rb_ref_hit_point(w, prim, bu, bv, q);
     rb_ref_offset(s->p, s->ng, org);
     float d[3] = {q[0] - org[0], q[1] - org[1], q[2] - org[2]};
-    float dist2 = rb_ref_dot(d, d), dist = sqrtf(dist2);
+    float dist2 = rb_f3_dot(d, d), dist = sqrtf(dist2);
     if (!(dist > 0.0f))
         return;
     float l[3] = {d[0] / dist, d[1] / dist, d[2] / dist};
     float ne[3];
     face_normal(w, prim, ne);
-    float cos_l = fabsf(rb_ref_dot(ne, l));
+    float cos_l = fabsf(rb_f3_dot(ne, l));
     if (!(cos_l > 0.0f))
         return;
     float pdf = w->emit_pdf_area[prim] * dist2 / cos_l;
@@ -204,7 +204,7 @@ static void nee_area(const struct rb_ref_world *w, const struct rb_ref_surface *
     /* The ray ends just off the emitter on org's side, so that it cannot hit the emitter
      * itself (a relative shortening alone leaves a gap of only a few ulps when the ray is
      * nearly parallel to the emitter). */
-    if (rb_ref_dot(ne, l) > 0.0f)
+    if (rb_f3_dot(ne, l) > 0.0f)
         for (int i = 0; i < 3; i++)
             ne[i] = -ne[i];
     float q_off[3];
@@ -360,15 +360,15 @@ void rb_ref_bake_sample(const struct rb_ref_world *w, const float p[3], const fl
         float q[3], ne[3], le[3];
         rb_ref_hit_point(w, prim, bu, bv, q);
         float d[3] = {q[0] - org[0], q[1] - org[1], q[2] - org[2]};
-        float dist2 = rb_ref_dot(d, d), dist = sqrtf(dist2);
+        float dist2 = rb_f3_dot(d, d), dist = sqrtf(dist2);
         face_normal(w, prim, ne);
         float l[3] = {d[0] / dist, d[1] / dist, d[2] / dist};
-        float cos_l = dist > 0.0f ? fabsf(rb_ref_dot(ne, l)) : 0.0f;
-        float cos_s = dist > 0.0f && rb_ref_dot(ng, l) > 0.0f ? rb_ref_dot(n, l) : 0.0f;
+        float cos_l = dist > 0.0f ? fabsf(rb_f3_dot(ne, l)) : 0.0f;
+        float cos_s = dist > 0.0f && rb_f3_dot(ng, l) > 0.0f ? rb_f3_dot(n, l) : 0.0f;
         float pdf = w->emit_pdf_area[prim] * dist2 / cos_l;
         rb_ref_emission(w, prim, bu, bv, le);
         if (cos_l > 0.0f && cos_s > 0.0f && pdf > 0.0f && pdf < INFINITY && !is_black(le)) {
-            if (rb_ref_dot(ne, l) > 0.0f)
+            if (rb_f3_dot(ne, l) > 0.0f)
                 for (int i = 0; i < 3; i++)
                     ne[i] = -ne[i];
             float q_off[3];
@@ -382,7 +382,7 @@ void rb_ref_bake_sample(const struct rb_ref_world *w, const float p[3], const fl
         float l[3], u[2], le[3];
         rb_ref_rand2(rng, DIM_ENV_UV, u);
         float pdf = rb_ref_env_sample(w->env, n, u[0], u[1], l);
-        float cos_s = pdf > 0.0f && rb_ref_dot(ng, l) > 0.0f ? rb_ref_dot(n, l) : 0.0f;
+        float cos_s = pdf > 0.0f && rb_f3_dot(ng, l) > 0.0f ? rb_f3_dot(n, l) : 0.0f;
         if (cos_s > 0.0f) {
             rb_ref_env_eval(w->env, l, le);
             (*rays)++;

@@ -7,21 +7,6 @@
 
 #include <math.h>
 
-static float dot3(const float a[3], const float b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const float a[3], const float b[3], float out[3])
-{
-    float x = a[1] * b[2] - a[2] * b[1];
-    float y = a[2] * b[0] - a[0] * b[2];
-    float z = a[0] * b[1] - a[1] * b[0];
-    out[0] = x;
-    out[1] = y;
-    out[2] = z;
-}
-
 /* GLSL's mat4 * vec4 for column-major m: sum of columns times components. */
 static void mat_vec4(const struct rb_mat4 *m, const float v[4], float out[4])
 {
@@ -54,10 +39,10 @@ static void mat3_vec(const struct mat3 *m, const float v[3], float out[3])
 static struct mat3 inverse_transpose3(const struct mat3 *a)
 {
     struct mat3 r;
-    cross3(a->c[1], a->c[2], r.c[0]);
-    cross3(a->c[2], a->c[0], r.c[1]);
-    cross3(a->c[0], a->c[1], r.c[2]);
-    float det = dot3(a->c[0], r.c[0]);
+    rb_f3_cross(a->c[1], a->c[2], r.c[0]);
+    rb_f3_cross(a->c[2], a->c[0], r.c[1]);
+    rb_f3_cross(a->c[0], a->c[1], r.c[2]);
+    float det = rb_f3_dot(a->c[0], r.c[0]);
     for (int c = 0; c < 3; c++)
         for (int k = 0; k < 3; k++)
             r.c[c][k] /= det;
@@ -66,7 +51,7 @@ static struct mat3 inverse_transpose3(const struct mat3 *a)
 
 static void safe_normalize(const float v[3], const float fallback[3], float out[3])
 {
-    float l = sqrtf(dot3(v, v));
+    float l = sqrtf(rb_f3_dot(v, v));
     for (int i = 0; i < 3; i++)
         out[i] = l > 1e-20f ? v[i] / l : fallback[i];
 }

@@ -586,8 +586,8 @@ static void scene_rays(const struct world *w, const struct rb_bvh *bvh, struct r
                 e1[c] = p[1][c] - p[0][c];
                 e2[c] = p[2][c] - p[0][c];
             }
-            rb_ref_cross(e1, e2, n);
-            float len = sqrtf(rb_ref_dot(n, n)), side = rb_ref_dot(n, d) < 0.0f ? -1.0f : 1.0f;
+            rb_f3_cross(e1, e2, n);
+            float len = sqrtf(rb_f3_dot(n, n)), side = rb_f3_dot(n, d) < 0.0f ? -1.0f : 1.0f;
             for (int c = 0; c < 3; c++)
                 o[c] = (1.0f - a) * p[0][c] + a * (1.0f - b) * p[1][c] + a * b * p[2][c] +
                        (len > 0.0f ? side * 1e-4f * diag * n[c] / len : 0.0f);

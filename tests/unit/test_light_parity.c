@@ -170,7 +170,7 @@ static void cpu_light(const struct rb_gpu_light *g, const float p[3], float out[
             l[k] = -L.direction[k];
     } else {
         float d[3] = {L.position[0] - p[0], L.position[1] - p[1], L.position[2] - p[2]};
-        dist = sqrtf(rb_ref_dot(d, d));
+        dist = sqrtf(rb_f3_dot(d, d));
         float inv = 1.0f / rb_ref_maxf(dist, 1e-8f);
         for (int k = 0; k < 3; k++)
             l[k] = d[k] * inv;
