@@ -453,8 +453,10 @@ static void update_emitters(struct rb_reference *ref)
     ref->world.emitter_count = total > 0.0 ? ref->emitter_total : 0;
 }
 
-static enum rb_status prepare_frame(struct rb_reference *ref, int frame, double t, double t_prev,
-                                    struct rb_err *err)
+/* The cameras of a rendered frame at t and the frame before it (t_prev), with the previous
+ * pose's vertices for the motion vectors; after prepare_world, whose pose the camera reads. */
+static enum rb_status prepare_camera(struct rb_reference *ref, double t, double t_prev,
+                                     struct rb_err *err)
 {
     const struct rb_job *job = ref->job;
     rb_scene_evaluate(ref->scene, &ref->sel, t_prev, ref->prev_pose);
@@ -463,14 +465,8 @@ static enum rb_status prepare_frame(struct rb_reference *ref, int frame, double 
     if (st)
         return st;
     rb_scene_deform(ref->scene, ref->prev_pose, ref->prev_pos, 3, NULL, NULL, NULL);
-    rb_scene_evaluate(ref->scene, &ref->sel, t, ref->pose);
     if ((st = rb_camera_evaluate(job, ref->scene, &ref->setup, ref->pose, t, &ref->cam, err)))
         return st;
-    rb_scene_deform(ref->scene, ref->pose, ref->pos, 4, ref->nrm, ref->tan, ref->uv);
-    if ((st = update_lights(ref, err)))
-        return st;
-    update_emitters(ref);
-
     float aspect = (float)ref->width_px / (float)ref->height_px;
     struct rb_mat4 proj =
         rb_mat4_perspective(ref->cam.fov_y_rad, aspect, ref->cam.z_near, ref->cam.z_far);
@@ -484,6 +480,21 @@ static enum rb_status prepare_frame(struct rb_reference *ref, int frame, double 
     float len = sqrtf(rb_f3_dot(fwd, fwd));
     for (int i = 0; i < 3; i++)
         ref->cam_forward[i] = len > 0.0f ? fwd[i] / len : 0.0f;
+    return RB_OK;
+}
+
+/* The world of frame (time t) that rays see: the pose's vertices, lights, emitters, the Embree
+ * scene and the world struct the samples read. The bake needs this alone. */
+static enum rb_status prepare_world(struct rb_reference *ref, int frame, double t,
+                                    struct rb_err *err)
+{
+    const struct rb_job *job = ref->job;
+    rb_scene_evaluate(ref->scene, &ref->sel, t, ref->pose);
+    rb_scene_deform(ref->scene, ref->pose, ref->pos, 4, ref->nrm, ref->tan, ref->uv);
+    enum rb_status st = update_lights(ref, err);
+    if (st)
+        return st;
+    update_emitters(ref);
 
     if (ref->rtc) {
         rtcUpdateGeometryBuffer(ref->geom, RTC_BUFFER_TYPE_VERTEX, 0);
@@ -779,7 +790,7 @@ enum rb_status rb_reference_bake(struct rb_reference *ref, int frame,
                                  uint32_t samples, float *out, uint64_t *rays, struct rb_err *err)
 {
     double rate = ref->job->rate_fps > 0.0 ? ref->job->rate_fps : 1.0;
-    enum rb_status st = prepare_frame(ref, frame, frame / rate, (frame - 1) / rate, err);
+    enum rb_status st = prepare_world(ref, frame, frame / rate, err);
     if (st) {
         rb_err_prefix(err, "the baked light of frame %d", frame);
         return st;
@@ -818,7 +829,9 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct r
     double start = rb_monotonic_s();
     double rate = ref->job->rate_fps > 0.0 ? ref->job->rate_fps : 1.0;
     double t = frame / rate, t_prev = (frame - 1) / rate;
-    enum rb_status st = prepare_frame(ref, frame, t, t_prev, err);
+    enum rb_status st = prepare_world(ref, frame, t, err);
+    if (st == RB_OK)
+        st = prepare_camera(ref, t, t_prev, err);
     if (st) {
         rb_err_prefix(err, "reference frame %d", frame);
         return st;
