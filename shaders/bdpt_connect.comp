@@ -195,17 +195,18 @@ void from_vpl_at_x1(uint j, vec3 x1, vec3 n1, vec3 ng1, vec3 v1, vec3 f0, float 
 }
 
 // (c) for VPL j: its light at the bundle's hit z1 (normal nz, reached along dir from x1, cos_in
-// there), reflected at z1 to x1, times scale (the bundle's 2 pi cos1 / n_c). An emitter's point
-// (emitter) makes one-bounce paths: its G is not clamped (the clamp is for two-bounce paths,
-// whose singularity nothing balances), and with mis the path is weighed against its bounce
-// VPLs finding z1 through (a).
+// there), reflected at z1 to x1, times scale (the bundle's 2 pi cos1 / n_c). With mis the path
+// is weighed against VPL j's bounce finding z1 through (a), p(z1 | z) against the bundle's
+// density of z1: where z1 is near z, the bounce's density grows as the 1/r^2 of G does, and
+// takes those paths over. clamp_g bounds G where nothing balances it (an emitter's bounce,
+// whose (c) is the emitter's second bounce).
 void via_bundle(uint j, vec3 z1, vec3 nz, vec3 dir, rb_bundle_hit h, float cos_in, vec3 n1,
-                vec3 v1, vec3 f0, float f90, float rough, float scale, bool emitter, bool mis,
+                vec3 v1, vec3 f0, float f90, float rough, float scale, bool clamp_g, bool mis,
                 inout vec3 id, inout vec3 is)
 {
     vec3 l;
     float r2;
-    vec3 x = from_vpl(j, z1, nz, nz, !emitter, l, r2);
+    vec3 x = from_vpl(j, z1, nz, nz, clamp_g, l, r2);
     if (!any(greaterThan(x, vec3(0.0))))
         return;
     x *= surface_brdf(nz, -dir, l, h.m);
@@ -236,6 +237,7 @@ void main()
     uint k = pc.index.x, strategies = pc.index.w;
     bool has_vpl = pc.index.y != 0u && vpls[k].position.w > 0.0, has_bundle = pc.index.z != 0u;
     bool has_bounce = pc.bounce.x != RB_NONE && vpls[pc.bounce.x].position.w > 0.0;
+    bool has_bounce2 = pc.bounce.y != RB_NONE && vpls[pc.bounce.y].position.w > 0.0;
     float n_a = pc.counts.x, n_b = pc.counts.y, n_c = pc.counts.z;
     vec3 dd = vec3(0.0), ds = vec3(0.0), id = vec3(0.0), is = vec3(0.0);
 
@@ -247,6 +249,8 @@ void main()
             from_vpl_at_x1(k, x1, n1, ng1, v1, f0, f90, rough, n_b, dd, ds, id, is);
         if (has_bounce)
             from_vpl_at_x1(pc.bounce.x, x1, n1, ng1, v1, f0, f90, rough, n_c, dd, ds, id, is);
+        if (has_bounce2)
+            from_vpl_at_x1(pc.bounce.y, x1, n1, ng1, v1, f0, f90, rough, n_c, dd, ds, id, is);
     }
 
     // (b) and (c) along bundle k: the direction leaves x1 on its geometric front side, uniform
@@ -284,19 +288,20 @@ void main()
                     add(id, is, n1, v1, dir, f0, f90, rough, x * (scale / n_b));
                 }
                 if (n_c > 0.0) {
-                    // (c): VPL k -> z1 -> x1. An emitter's point makes one-bounce paths, which
-                    // its bounce VPLs also make through (a): weighed against them (p(z1 | y0)
-                    // against the bundle's density of z1), and left to them under
-                    // strategies=vpl. Other VPLs and bounce VPLs make two-bounce paths, for
-                    // which (c) is the only strategy.
-                    bool is_emitter = uint(vpls[k].from.w) == RB_BDPT_VPL_EMITTER;
-                    if (has_vpl && !(is_emitter && strategies == RB_BDPT_VPL))
+                    // (c): VPL k -> z1 -> x1: one bounce from an emitter's point, two from a
+                    // punctual light's VPL; and the same from an emitter's bounce, two
+                    // bounces. Each time the VPL's own bounce makes the same paths through (a):
+                    // weighed against it under mis, left to it under vpl. A punctual VPL's
+                    // bounce, and an emitter's bounce's bounce, have no (c): it would be a
+                    // third bounce.
+                    bool mis = strategies == RB_BDPT_MIS;
+                    if (has_vpl && strategies != RB_BDPT_VPL)
                         via_bundle(k, z1, nz, dir, h, cos_in, n1, v1, f0, f90, rough,
-                                   scale / n_c, is_emitter, is_emitter && strategies == RB_BDPT_MIS,
-                                   id, is);
-                    if (has_bounce)
+                                   scale / n_c, false, mis, id, is);
+                    if (has_bounce && strategies != RB_BDPT_VPL &&
+                        uint(vpls[pc.bounce.x].from.w) == RB_BDPT_VPL_BOUNCE)
                         via_bundle(pc.bounce.x, z1, nz, dir, h, cos_in, n1, v1, f0, f90, rough,
-                                   scale / n_c, false, false, id, is);
+                                   scale / n_c, false, mis, id, is);
                 }
             }
         }

@@ -211,14 +211,6 @@ float emitter_chance(out float sum)
     return total > 0.0 ? flux / total : 0.0;
 }
 
-// A direction about n, distributed as its cosine, from two uniform numbers.
-vec3 cosine_direction(vec3 n, vec2 u)
-{
-    vec3 x = perpendicular(n), y = cross(n, x);
-    float r = sqrt(u.x), phi = 2.0 * RB_PI * u.y;
-    return normalize(x * (r * cos(phi)) + y * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - u.x)));
-}
-
 void vpl(uint i)
 {
     vec3 u = samples[i].u.xyz;
@@ -228,23 +220,14 @@ void vpl(uint i)
     vpls[i] = o;
     vec3 n = o.normal.xyz;
     vpl_views[i] = vpl_view(o.position.xyz, n, pc.scene.w);
-    // An emitter's point also probes, along a cosine-distributed direction, for the surface
-    // its emission reaches first: the bounce VPL (bdpt_bounce.comp). Other VPLs' probes draw
-    // nothing (and their views are empty: every corner at the clip origin). A VPL without a
-    // surface draws no map.
+    // A VPL also probes, along a cosine-distributed direction about the side its light leaves
+    // from, for the surface that light reaches first: the bounce VPL (bdpt_bounce.comp). A VPL
+    // without a surface draws no map, and its probe nothing (its view is empty: every corner
+    // at the clip origin).
     vpl_draws[i * RB_BDPT_DRAW_UINTS + RB_BDPT_DRAW_INSTANCES] = o.position.w > 0.0 ? 1u : 0u;
-    rb_gpu_view probe;
-    probe.transform = mat4(0.0);
-    probe.origin = vec4(0.0);
-    probe.axis = vec4(0.0);
-    bool probes = uint(o.from.w) == RB_BDPT_VPL_EMITTER && o.position.w > 0.0;
+    bool probes = o.position.w > 0.0;
     probe_draws[i * RB_BDPT_DRAW_UINTS + RB_BDPT_DRAW_INSTANCES] = probes ? 1u : 0u;
-    if (probes) {
-        float far = vpl_far(pc.scene.w);
-        probe = probe_view(o.position.xyz + n * vpl_lift(pc.scene.w),
-                           cosine_direction(n, samples[i].v.xy), 1e-4 * far, far);
-    }
-    probe_views[i] = probe;
+    probe_views[i] = bounce_probe(probes, o.position.xyz, n, samples[i].v.xy, pc.scene.w);
 }
 
 void main()

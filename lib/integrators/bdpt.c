@@ -1,12 +1,15 @@
 /* The bdpt integrator (seed 000; DESIGN.md "bdpt", BDPT.md): direct's frame, then
- *   rsm -> bounds -> [emitters] -> generate -> [probe -> bounce] -> vpl -> split -> (bundle k ->
- * connect k) for each k -> gather -> filter -> output. Reflective shadow maps of the shadowed
- * punctual lights give the VPLs' surfaces; the emissive triangles give VPLs too, points on them
- * picked by power, which light the camera's points directly (weighed against the bundles that find
- * the emitter) and, through a bundle, one bounce further; each such point probes along a
- * cosine-distributed direction (a 1x1 reflective shadow map) for the surface its light meets first,
- * VPL K_v + i, which gives the emitter's light its bounces as a punctual light's VPL does. Each VPL
- * gets a paraboloid shadow map; each global ray-bundle is an orthographic view into per-pixel
+ *   rsm -> bounds -> [emitters] -> generate -> probe -> bounce -> [probe -> bounce] -> vpl ->
+ *   split -> (bundle k -> connect k) for each k -> gather -> filter -> output.
+ * Reflective shadow maps of the shadowed punctual lights give the VPLs' surfaces; the emissive
+ * triangles give VPLs too, points on them picked by power, which light the camera's points
+ * directly (weighed against the bundles that find the emitter) and, through a bundle, one bounce
+ * further. Every VPL probes along a cosine-distributed direction (a 1x1 reflective shadow map)
+ * for the surface its light meets first, VPL K_v + i, its bounce, which makes the VPL's bundle
+ * connections again through its own connection to the camera's point, so that the balance
+ * heuristic hands their short connections, where the VPL's 1/r^2 would spike, to the bounce; an
+ * emitter's bounce has a bounce of its own, VPL 2 K_v + i, for the emitter's second bounce. Each
+ * VPL gets a paraboloid shadow map; each global ray-bundle is an orthographic view into per-pixel
  * linked lists, connected to the sub-image of the interleaved G-buffer it lights before the next
  * one reuses the list. Temporal interleaved sampling (seed 000, section A): l caches, one per
  * subpixel offset; frame f computes cache f mod l alone, with that slot's own block of the
@@ -45,7 +48,13 @@ struct bdpt {
 
 /* The sampling table's streams (rb_qmc_point2): fixed, so every scene and frame draws the same
  * numbers. */
-enum { STREAM_VPL_DIRECTION = 1, STREAM_VPL_LIGHT = 2, STREAM_BUNDLE = 3, STREAM_VPL_BOUNCE = 4 };
+enum {
+    STREAM_VPL_DIRECTION = 1,
+    STREAM_VPL_LIGHT = 2,
+    STREAM_BUNDLE = 3,
+    STREAM_VPL_BOUNCE = 4,
+    STREAM_VPL_BOUNCE2 = 5,
+};
 
 /* l, the temporal caches (the job's; 4 when unset). */
 static uint32_t cache_count(const struct rb_job *job)
@@ -152,6 +161,9 @@ static void fill_samples(struct rb_bdpt_frame *b, uint32_t slot, uint32_t block)
             rb_qmc_point2(STREAM_VPL_BOUNCE, index, u);
             s[i].v[0] = rb_qmc_float(u[0]);
             s[i].v[1] = rb_qmc_float(u[1]);
+            rb_qmc_point2(STREAM_VPL_BOUNCE2, index, u);
+            s[i].v[2] = rb_qmc_float(u[0]);
+            s[i].v[3] = rb_qmc_float(u[1]);
         } else {
             rb_qmc_point2(STREAM_BUNDLE, index, u);
             s[i].u[0] = rb_qmc_float(u[0]);
@@ -217,9 +229,11 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
     if (align > 1)
         b->sample_block_bytes = (b->sample_block_bytes + align - 1) / align * align;
     VkDeviceSize sample_bytes = b->sample_block_bytes * b->cache_count;
-    /* With emitters, VPL i's bounce is VPL K_v + i. */
-    b->has_bounce = b->emitter_count > 0 && b->vpl_count > 0;
-    uint32_t all = b->has_bounce ? 2 * kv : kv;
+    /* VPL i's bounce is VPL K_v + i (BDPT.md "Two bounces"). */
+    b->has_bounce = b->vpl_count > 0;
+    /* With emitters, the bounce of emitter VPL i's bounce is VPL 2 K_v + i. */
+    b->has_chain = b->has_bounce && b->emitter_count > 0;
+    uint32_t all = b->has_chain ? 3 * kv : b->has_bounce ? 2 * kv : kv;
     if ((st = rb_frame_buffer(gpu, 8 * sizeof(uint32_t), STORAGE, false, "bdpt.bounds", &b->bounds,
                               err)) ||
         (st =
@@ -510,10 +524,11 @@ static void record_rsm(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer
     rb_integrator_pass_end(it, cmd);
 }
 
-/* The emitters' bounces: each emitter VPL's probe (a 1x1 reflective shadow map along its
- * direction: the first surface its light meets), then VPLs K_v + i from them. */
+/* The VPLs' bounces (BDPT.md "Two bounces"), one round: each probe (a 1x1 reflective shadow
+ * map along its direction: the first surface its VPL's light meets), then the bounces from them:
+ * round 0 makes VPLs K_v + i from VPLs i, round 1 VPLs 2 K_v + i from the emitters' bounces. */
 static void record_bounce(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer cmd,
-                          const struct rb_frame_ctx *ctx)
+                          const struct rb_frame_ctx *ctx, uint32_t round)
 {
     struct rb_frame *frame = &it->frame;
     struct rb_bdpt_frame *b = &d->b;
@@ -548,14 +563,16 @@ static void record_bounce(struct rb_integrator *it, struct bdpt *d, VkCommandBuf
     const struct rb_gpu_access bounce[] = {
         {.buffer = &b->vpls, .use = RB_GPU_COMPUTE_READ_WRITE},
         {.buffer = &b->vpl_views, .use = RB_GPU_COMPUTE_WRITE},
-        {.buffer = &b->probe_views, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &b->probe_views, .use = RB_GPU_COMPUTE_READ_WRITE},
         {.image = &b->probe[0], .use = RB_GPU_COMPUTE_READ},
         {.image = &b->probe[1], .use = RB_GPU_COMPUTE_READ},
         {.image = &b->probe[3], .use = RB_GPU_COMPUTE_READ},
         {.buffer = &b->vpl_draws, .use = RB_GPU_COMPUTE_WRITE},
+        {.buffer = &b->samples, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &b->probe_draws, .use = RB_GPU_COMPUTE_WRITE},
     };
     rb_integrator_pass_begin(it, cmd, "bounce", bounce, COUNT(bounce));
-    rb_pass_bdpt_bounce_record(d->passes, cmd, b);
+    rb_pass_bdpt_bounce_record(d->passes, cmd, b, round);
     rb_integrator_pass_end(it, cmd);
 }
 
@@ -686,7 +703,9 @@ static void record_cache(struct rb_integrator *it, struct bdpt *d, VkCommandBuff
     rb_pass_bdpt_generate_record(d->passes, cmd, frame, ctx->cur, b);
     rb_integrator_pass_end(it, cmd);
     if (b->has_bounce)
-        record_bounce(it, d, cmd, ctx);
+        record_bounce(it, d, cmd, ctx, 0);
+    if (b->has_chain)
+        record_bounce(it, d, cmd, ctx, 1);
 
     if (b->vpl_count) {
         const struct rb_gpu_access vpl[] = {
@@ -703,7 +722,9 @@ static void record_cache(struct rb_integrator *it, struct bdpt *d, VkCommandBuff
                                 .kind = RB_VIEW_KIND_PARABOLOID,
                                 .output = RB_VIEW_OUTPUT_DEPTH,
                                 .views = &b->vpl_views,
-                                .view_count = b->has_bounce ? 2 * b->vpl_count : b->vpl_count,
+                                .view_count = b->vpl_count * (b->has_chain    ? 3u
+                                                              : b->has_bounce ? 2u
+                                                                              : 1u),
                                 .targets = {&b->vpl_maps},
                                 .depth = &b->vpl_depth,
                                 .use_simplified = true,

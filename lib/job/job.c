@@ -205,12 +205,12 @@ static const struct key keys[] = {
     K("integrator.bdpt.filter_radius", KT_UINT, JOB(integrator.bdpt.filter_radius_px), 0, 16, "4",
       0, "bdpt: geometry-aware filter radius in pixels; 0: no filter"),
     K("integrator.bdpt.filter_depth", KT_FLOAT, JOB(integrator.bdpt.filter_depth), 0, NOHI, "0.05",
-      0, "bdpt: relative depth difference at which the filter stops"),
+      0, "bdpt: distance from a pixel's tangent plane, relative to its depth, at which the filter stops"),
     K("integrator.bdpt.filter_normal", KT_FLOAT, JOB(integrator.bdpt.filter_normal), -1, 1, "0.9",
       0, "bdpt: cosine between normals below which the filter stops"),
     K("integrator.bdpt.clamp", KT_FLOAT, JOB(integrator.bdpt.clamp), 0, NOHI, "100", 0,
-      "bdpt: bound on the geometry term of two-bounce paths, in units of one over the scene "
-      "diagonal squared; 0: no clamp"),
+      "bdpt: with strategies vpl, bound on the geometry term of the VPLs' connections, in units "
+      "of one over the scene diagonal squared; 0: no clamp"),
     K("integrator.bdpt.vpl_bias", KT_FLOAT, JOB(integrator.bdpt.vpl_bias), 0, NOHI, "0.01", 0,
       "bdpt: VPL shadow-map depth bias as a fraction of the distance to the VPL"),
     K("integrator.bdpt.view_triangles", KT_UINT, JOB(integrator.bdpt.view_triangles), 0, UINT32_MAX,

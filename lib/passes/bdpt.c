@@ -67,6 +67,8 @@ static const struct rb_pass_binding bounce_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_PROBE_NORMAL, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_PROBE_MATERIAL, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_VPL_DRAWS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_SAMPLES, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_BOUNCE_PROBE_DRAWS, STORAGE_BUFFER),
 };
 _Static_assert(COUNT(bounce_bindings) == RB_BIND_BDPT_BOUNCE_COUNT, "bounce bindings");
 
@@ -309,7 +311,7 @@ void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
 }
 
 void rb_pass_bdpt_bounce_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
-                                const struct rb_bdpt_frame *b)
+                                const struct rb_bdpt_frame *b, uint32_t round)
 {
     struct rb_pass_bindings bind = {.pass = &p->bounce};
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_BOUNCE_VPLS, &b->vpls);
@@ -319,9 +321,13 @@ void rb_pass_bdpt_bounce_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     rb_pass_bind_image(&bind, RB_BIND_BDPT_BOUNCE_PROBE_NORMAL, b->probe[1].view, VK_NULL_HANDLE);
     rb_pass_bind_image(&bind, RB_BIND_BDPT_BOUNCE_PROBE_MATERIAL, b->probe[3].view, VK_NULL_HANDLE);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_BOUNCE_VPL_DRAWS, &b->vpl_draws);
+    rb_pass_bind_buffer_range(&bind, RB_BIND_BDPT_BOUNCE_SAMPLES, &b->samples,
+                              b->slot * b->sample_block_bytes, b->sample_block_bytes);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_BOUNCE_PROBE_DRAWS, &b->probe_draws);
     rb_pass_record_bindings(cmd, &bind);
+    uint32_t k = b->vpl_count;
     struct rb_gpu_bdpt_bounce_push pc = {
-        .counts = {b->vpl_count, 0, 0, 0},
+        .counts = {k, round * k, (round + 1) * k, round == 0 && b->has_chain},
         .scene = {b->scene_centre[0], b->scene_centre[1], b->scene_centre[2], b->scene_radius},
     };
     push(cmd, &p->bounce, &pc, sizeof(pc));
@@ -394,7 +400,8 @@ void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                    (float)share(pairs, s, count), b->clamp_g},
         .params = {b->vpl_bias, (float)b->vpl_size_px, (float)b->bundle_size_px,
                    (float)b->bundle.capacity_nodes},
-        .bounce = {b->has_bounce && k < b->vpl_count ? b->vpl_count + k : RB_NONE, 0, 0, 0},
+        .bounce = {b->has_bounce && k < b->vpl_count ? b->vpl_count + k : RB_NONE,
+                   b->has_chain && k < b->vpl_count ? 2 * b->vpl_count + k : RB_NONE, 0, 0},
     };
     push(cmd, &p->connect, &pc, sizeof(pc));
     vkCmdDispatch(cmd, groups(b->sub_width_px, 8), groups(b->sub_height_px, 8), 1);

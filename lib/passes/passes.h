@@ -332,12 +332,13 @@ struct rb_bdpt_frame {
     float scene_centre[3], scene_radius; /* the job's bounds */
     uint32_t emitter_count;              /* emissive triangles */
     float punctual_power;                /* W: the punctual lights' that have VPLs, this frame */
-    bool has_bounce; /* emitters' VPLs probe for their bounces: VPLs K_v..2 K_v - 1 */
+    bool has_bounce; /* VPLs probe for their bounces: VPLs K_v..2 K_v - 1 */
+    bool has_chain;  /* and the emitters' bounces for theirs: VPLs 2 K_v..3 K_v - 1 */
 
     struct rb_gpu_buffer bounds;       /* lo[4], hi[4]: the G-buffer's box (bdpt_bounds.comp) */
     struct rb_gpu_buffer samples;      /* struct rb_gpu_bdpt_sample [K_v + K_b] */
     struct rb_gpu_buffer lights;       /* struct rb_gpu_bdpt_light per light, host-visible */
-    struct rb_gpu_buffer vpls;         /* struct rb_gpu_vpl [K_v], [2 K_v] with bounces */
+    struct rb_gpu_buffer vpls;         /* struct rb_gpu_vpl [K_v], [2 K_v] or [3 K_v] with bounces */
     struct rb_gpu_buffer vpl_views;    /* struct rb_gpu_view, as vpls: paraboloid */
     struct rb_gpu_buffer probe_views;  /* struct rb_gpu_view [K_v]: perspective, 1x1 */
     struct rb_gpu_buffer vpl_draws;    /* VkDrawIndexedIndirectCommand, as vpls */
@@ -390,9 +391,11 @@ void rb_pass_bdpt_emitters_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
 void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                   const struct rb_frame *frame, const struct rb_frame_slot *slot,
                                   const struct rb_bdpt_frame *b);
-/* VPLs K_v + i, the bounces of the emitters' VPLs i, from their probes, and their views. */
+/* Round 0: VPLs K_v + i, the bounces of VPLs i, from their probes, and their views (and, with
+ * has_chain, the probes of the emitters' bounces); round 1: VPLs 2 K_v + i, the bounces of
+ * VPLs K_v + i. */
 void rb_pass_bdpt_bounce_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
-                                const struct rb_bdpt_frame *b);
+                                const struct rb_bdpt_frame *b, uint32_t round);
 /* The G-buffer into n x n sub-images (b->split); zeroes b->accum. */
 void rb_pass_bdpt_split_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                const struct rb_bdpt_frame *b);

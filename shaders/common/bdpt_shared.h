@@ -32,6 +32,14 @@ struct rb_gpu_vpl {
  * normal.w is p(y1 | y0), y1's area density given y0 (rb_bdpt_bounce_density). */
 #define RB_BDPT_VPL_BOUNCE 5
 
+/* A VPL's from.w when it is the first surface z' that a reflecting VPL z (a punctual light's,
+ * or an emitter's bounce) sees along a cosine-distributed direction (BDPT.md "Two bounces"):
+ * VPL K_v + i, the bounce of punctual VPL i, or 2 K_v + i, the bounce of emitter VPL i's
+ * bounce. It reflects what z reflects towards it; from.xyz is z; normal.w is p(z' | z). It
+ * lights the camera's points through (a) only (its bundle connection would be a third bounce).
+ */
+#define RB_BDPT_VPL_SECOND 6
+
 /* One emissive triangle, listed once when the integrator starts (a triangle of the scene whose
  * material's emissive factor is above zero). */
 struct rb_gpu_bdpt_emitter {
@@ -59,7 +67,7 @@ struct rb_gpu_bdpt_light {
 struct rb_gpu_bdpt_sample {
     RB_VEC4(u); /* VPL: light choice, two for the direction or beam point; bundle: two for the
                  * direction; w unused */
-    RB_VEC4(v); /* VPL: two for the direction of an emitter point's bounce; z, w unused */
+    RB_VEC4(v); /* VPL: two for the direction of its bounce, two for its bounce's (emitters) */
 };
 
 /* The draw commands of the VPL maps and probes are VkDrawIndexedIndirectCommand, five uints;
@@ -86,7 +94,7 @@ struct rb_gpu_bdpt_connect_push {
                         * floats); the G clamp (0: none) */
     RB_VEC4(params);   /* VPL bias, VPL map size, bundle grid size, node capacity */
     RB_UVEC4(bounce);  /* x: the index of VPL k's bounce (K_v + k), or RB_NONE where the frame
-                        * has none; y, z, w: unused */
+                        * has none; y: its bounce's (2 K_v + k), or RB_NONE; z, w: unused */
 };
 
 /* Push constants of bdpt_emitters.comp. */
@@ -96,9 +104,13 @@ struct rb_gpu_bdpt_emitters_push {
 
 /* Push constants of bdpt_bounce.comp. */
 struct rb_gpu_bdpt_bounce_push {
-    RB_UVEC4(counts); /* K_v, unused, unused, unused */
+    RB_UVEC4(counts); /* K_v; src, the first VPL probed (0 or K_v); dst, where its bounces go
+                       * (K_v or 2 K_v); whether the emitters' bounces probe for a next round */
     RB_VEC4(scene);   /* xyz: the centre of the job's bounds; w: their radius */
 };
+
+/* Spatial interleaving (seed 000, A.1): at most this many sub-images along each axis. */
+#define RB_BDPT_MAX_INTERLEAVE 8
 
 /* The temporal caches (seed 000, section A; DESIGN.md "Temporal interleaved sampling"): at most
  * this many, one reprojection target each. */

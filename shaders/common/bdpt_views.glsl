@@ -70,3 +70,27 @@ rb_gpu_view probe_view(vec3 eye, vec3 dir, float near, float far)
     v.axis = vec4(dir, 0.0);
     return v;
 }
+
+// A direction about n, distributed as its cosine, from two uniform numbers.
+vec3 cosine_direction(vec3 n, vec2 u)
+{
+    vec3 x = perpendicular(n), y = cross(n, x);
+    float r = sqrt(u.x), phi = 2.0 * RB_PI * u.y;
+    return normalize(x * (r * cos(phi)) + y * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - u.x)));
+}
+
+// The probe of a VPL at position (normal n, on the side its light leaves from) for its bounce:
+// along a cosine-distributed direction from two uniform numbers u, from its lifted eye; an
+// empty view (every corner at the clip origin, which draws nothing) where it makes none.
+rb_gpu_view bounce_probe(bool probes, vec3 position, vec3 n, vec2 u, float r)
+{
+    rb_gpu_view probe;
+    probe.transform = mat4(0.0);
+    probe.origin = vec4(0.0);
+    probe.axis = vec4(0.0);
+    if (probes) {
+        float far = vpl_far(r);
+        probe = probe_view(position + n * vpl_lift(r), cosine_direction(n, u), 1e-4 * far, far);
+    }
+    return probe;
+}

@@ -89,15 +89,17 @@
 #define RB_BIND_BDPT_EMITTERS_CDF 3 /* written */
 #define RB_BIND_BDPT_EMITTERS_COUNT 4
 
-/* bdpt_bounce.comp: the bounces of the emitters' VPLs, from their probes */
-#define RB_BIND_BDPT_BOUNCE_VPLS 0 /* read (VPL i), written (VPL K_v + i) */
+/* bdpt_bounce.comp: the bounces of the VPLs, from their probes */
+#define RB_BIND_BDPT_BOUNCE_VPLS 0 /* read (VPL src + i), written (VPL dst + i) */
 #define RB_BIND_BDPT_BOUNCE_VPL_VIEWS 1 /* written */
-#define RB_BIND_BDPT_BOUNCE_PROBE_VIEWS 2
+#define RB_BIND_BDPT_BOUNCE_PROBE_VIEWS 2 /* read; written for the next round */
 #define RB_BIND_BDPT_BOUNCE_PROBE_POSITION 3
 #define RB_BIND_BDPT_BOUNCE_PROBE_NORMAL 4
 #define RB_BIND_BDPT_BOUNCE_PROBE_MATERIAL 5
-#define RB_BIND_BDPT_BOUNCE_VPL_DRAWS 6 /* written: instance counts, VPLs K_v..2 K_v - 1 */
-#define RB_BIND_BDPT_BOUNCE_COUNT 7
+#define RB_BIND_BDPT_BOUNCE_VPL_DRAWS 6 /* written: instance counts of VPLs dst..dst + K_v - 1 */
+#define RB_BIND_BDPT_BOUNCE_SAMPLES 7   /* the slot's block of the sampling table */
+#define RB_BIND_BDPT_BOUNCE_PROBE_DRAWS 8 /* written for the next round */
+#define RB_BIND_BDPT_BOUNCE_COUNT 9
 
 /* bdpt_split.comp: the G-buffer into n x n sub-images */
 #define RB_BIND_BDPT_SPLIT_GB_POSITION 0

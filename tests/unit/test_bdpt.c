@@ -154,6 +154,41 @@ static void test_bounce(void **state)
     assert_true(fabs(sum - 1.0) < 0.002); /* beyond 50 m: 1 / 2501 of it */
 }
 
+/* Two-bounce paths y0 -> z -> z1 -> x1 (BDPT.md "Two bounces"): (c), VPL z and the bundle from
+ * x1 finding z1, against (a) of z's bounce z1 (a cosine-distributed direction from z). Whatever
+ * the distance r from z to z1, (c)'s weight times its geometry term G(z, z1) = cos_z cos_z1 / r^2
+ * stays below pi (n_c / n_a) p_B(z1 | x1): the singularity a clamp used to bound is gone, and
+ * the weight falls to 0 as z1 nears z, where the bounce takes the paths over. */
+static void test_two_bounce(void **state)
+{
+    (void)state;
+    uint64_t rng = 11;
+    for (int i = 0; i < 100000; i++) {
+        struct rb_vec3 x1 = rb_v3_scale(unit(&rng), 2.0f), n1 = unit(&rng);
+        float r = powf(10.0f, -4.0f * uniform(&rng)); /* 1e-4 to 1 */
+        float cos_z = uniform(&rng), cos_z1 = uniform(&rng);
+        struct rb_vec3 z1 = rb_v3_scale(unit(&rng), 0.5f);
+        struct rb_vec3 to_x = rb_v3_sub(x1, z1);
+        float dx = rb_v3_dot(to_x, to_x);
+        float p_bundle = rb_bdpt_bundle_density(fabsf(rb_v3_dot(n1, to_x)) / sqrtf(dx), dx);
+        float p_bounce = rb_bdpt_bounce_density(cos_z, cos_z1, r * r);
+        float n_a = (float)(1 + (int)(uniform(&rng) * 8.0f));
+        float n_c = (float)(1 + (int)(uniform(&rng) * 8.0f));
+        if (!(p_bundle > 0.0f && p_bounce > 0.0f))
+            continue;
+        float wc = rb_bdpt_balance(n_c, p_bundle, n_a, p_bounce);
+        float wa = rb_bdpt_balance(n_a, p_bounce, n_c, p_bundle);
+        assert_true(fabs((double)wa + (double)wc - 1.0) < 1e-6);
+        double g = (double)cos_z * cos_z1 / ((double)r * r);
+        double bound = RB_PI * n_c / n_a * p_bundle;
+        assert_true(wc * g <= bound * (1.0 + 1e-4));
+    }
+    /* Nearer and nearer: the weight of (c) goes to 0. */
+    float p_bundle = rb_bdpt_bundle_density(0.7f, 1.0f);
+    float near = rb_bdpt_balance(1.0f, p_bundle, 1.0f, rb_bdpt_bounce_density(0.7f, 0.7f, 1e-6f));
+    assert_true(near < 1e-5f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -161,6 +196,7 @@ int main(void)
         cmocka_unit_test(test_limits),
         cmocka_unit_test(test_densities),
         cmocka_unit_test(test_bounce),
+        cmocka_unit_test(test_two_bounce),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
