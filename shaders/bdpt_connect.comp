@@ -171,8 +171,9 @@ void add(inout vec3 diffuse, inout vec3 specular, vec3 n, vec3 v, vec3 l, vec3 f
 }
 
 // (a) for VPL j: its light at x1, weighed by MIS against the bundle strategy that makes the same
-// paths (n_o of its samples in this sub-image: bundles for punctual and emitter VPLs, pairs for
-// bounce VPLs), into the direct (an emitter's point) or indirect accumulators.
+// paths (n_o of its samples in this sub-image: bundles for punctual and emitter VPLs, with the
+// balance heuristic; pairs for bounce VPLs, against their parent's (c), with the power
+// heuristic), into the direct (an emitter's point) or indirect accumulators.
 void from_vpl_at_x1(uint j, vec3 x1, vec3 n1, vec3 ng1, vec3 v1, vec3 f0, float f90, float rough,
                     float n_o, inout vec3 dd, inout vec3 ds, inout vec3 id, inout vec3 is)
 {
@@ -186,7 +187,8 @@ void from_vpl_at_x1(uint j, vec3 x1, vec3 n1, vec3 ng1, vec3 v1, vec3 f0, float 
     float w = 1.0;
     if (strategies == RB_BDPT_MIS) {
         float pdf_bundle = rb_bdpt_bundle_density(-dot(vpls[j].normal.xyz, l), r2);
-        w = rb_bdpt_balance(n_a, vpls[j].normal.w, n_o, pdf_bundle);
+        w = j == pc.index.x ? rb_bdpt_balance(n_a, vpls[j].normal.w, n_o, pdf_bundle)
+                            : rb_bdpt_power(n_a, vpls[j].normal.w, n_o, pdf_bundle);
     }
     if (uint(vpls[j].from.w) == RB_BDPT_VPL_EMITTER)
         add(dd, ds, n1, v1, l, f0, f90, rough, x * (w / n_a));
@@ -196,17 +198,16 @@ void from_vpl_at_x1(uint j, vec3 x1, vec3 n1, vec3 ng1, vec3 v1, vec3 f0, float 
 
 // (c) for VPL j: its light at the bundle's hit z1 (normal nz, reached along dir from x1, cos_in
 // there), reflected at z1 to x1, times scale (the bundle's 2 pi cos1 / n_c). With mis the path
-// is weighed against VPL j's bounce finding z1 through (a), p(z1 | z) against the bundle's
-// density of z1: where z1 is near z, the bounce's density grows as the 1/r^2 of G does, and
-// takes those paths over. clamp_g bounds G where nothing balances it (an emitter's bounce,
-// whose (c) is the emitter's second bounce).
+// is weighed (power heuristic) against VPL j's bounce finding z1 through (a), p(z1 | z) against
+// the bundle's density of z1: where z1 is near z, the bounce's density grows as the 1/r^2 of G
+// does, and takes those paths over; nothing is clamped.
 void via_bundle(uint j, vec3 z1, vec3 nz, vec3 dir, rb_bundle_hit h, float cos_in, vec3 n1,
-                vec3 v1, vec3 f0, float f90, float rough, float scale, bool clamp_g, bool mis,
-                inout vec3 id, inout vec3 is)
+                vec3 v1, vec3 f0, float f90, float rough, float scale, bool mis, inout vec3 id,
+                inout vec3 is)
 {
     vec3 l;
     float r2;
-    vec3 x = from_vpl(j, z1, nz, nz, clamp_g, l, r2);
+    vec3 x = from_vpl(j, z1, nz, nz, false, l, r2);
     if (!any(greaterThan(x, vec3(0.0))))
         return;
     x *= surface_brdf(nz, -dir, l, h.m);
@@ -214,7 +215,7 @@ void via_bundle(uint j, vec3 z1, vec3 nz, vec3 dir, rb_bundle_hit h, float cos_i
     if (mis) {
         float pdf_bounce = rb_bdpt_bounce_density(-dot(vpls[j].normal.xyz, l), dot(nz, l), r2);
         float pdf_bundle = rb_bdpt_bundle_density(cos_in, h.t * h.t);
-        w = rb_bdpt_balance(pc.counts.z, pdf_bundle, pc.counts.x, pdf_bounce);
+        w = rb_bdpt_power(pc.counts.z, pdf_bundle, pc.counts.x, pdf_bounce);
     }
     add(id, is, n1, v1, dir, f0, f90, rough, x * (w * scale));
 }
@@ -297,11 +298,11 @@ void main()
                     bool mis = strategies == RB_BDPT_MIS;
                     if (has_vpl && strategies != RB_BDPT_VPL)
                         via_bundle(k, z1, nz, dir, h, cos_in, n1, v1, f0, f90, rough,
-                                   scale / n_c, false, mis, id, is);
+                                   scale / n_c, mis, id, is);
                     if (has_bounce && strategies != RB_BDPT_VPL &&
                         uint(vpls[pc.bounce.x].from.w) == RB_BDPT_VPL_BOUNCE)
                         via_bundle(pc.bounce.x, z1, nz, dir, h, cos_in, n1, v1, f0, f90, rough,
-                                   scale / n_c, false, mis, id, is);
+                                   scale / n_c, mis, id, is);
                 }
             }
         }

@@ -1,17 +1,20 @@
 // bdpt, filter (seed 000, A.1; Segovia et al. 2006): the geometry-aware filter that combines the
-// neighbouring pixels' sample subsets. A pixel takes the gathered light of the pixels within the
-// radius that saw samples (w of the indirect diffuse image: 1) and lie on its surface: within
-// the depth threshold (relative to its depth) of its tangent plane, so that a wall seen at a
-// grazing angle keeps its whole kernel, and with normals whose cosine to its own is at least the
-// normal threshold. It averages them sub-image by sub-image (the n x n classes of pixel
-// positions mod n, each with its own VPLs and bundles) and then the sub-images' means, each
-// counting once: a plain mean counts a sub-image as often as its pixels fall in the kernel,
-// which differs from class to class by position and wherever the surface test cuts the kernel,
-// and the sub-images' differences stay in the image as a 4x4 grid or as stripes. Indirect light,
-// of low frequency, takes the whole radius; direct light (emitters' points and the environment
-// through the bundles), which can change fast across a surface (a wall just below an area
-// light), only one interleave block's, enough to gather every sub-image's samples. The sums run
-// in a fixed order, so the result does not depend on scheduling.
+// neighbouring pixels' sample subsets. A pixel takes the gathered light of the pixels around it
+// that saw samples (w of the indirect diffuse image: 1) and lie on its surface: within the depth
+// threshold (relative to its depth) of its tangent plane, so that a wall seen at a grazing angle
+// keeps its whole kernel, and with normals whose cosine to its own is at least the normal
+// threshold. It combines them sub-image by sub-image (the n x n classes of pixel positions mod
+// n, each with its own VPLs and bundles), normalising each class's weights to one, and then
+// averages the classes, each counting once: a plain mean counts a sub-image as often as its
+// pixels fall in the kernel, which differs from class to class by position and wherever the
+// surface test cuts the kernel, and the sub-images' differences stay in the image as a grid or
+// as stripes. Indirect light, of low frequency, takes a tent of half-width h (a multiple of n):
+// per class that is linear interpolation of the class's own lattice (h = n) or a smoother
+// B-spline of it, which reproduces a class's gradient, so that its error's slope does not land
+// differently on each class of pixels either. Direct light (emitters' points and the
+// environment through the bundles), which can change fast across a surface (a wall just below an
+// area light), takes only a box of one interleave block, enough to hold a sample of every
+// sub-image. The sums run in a fixed order, so the result does not depend on scheduling.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "bindings_shared.h"
@@ -58,6 +61,12 @@ vec2 inverse_depth_slope(ivec2 px, ivec2 size, float w)
     return slope;
 }
 
+// The tent of half-width h at offset (dx, dy): (1 - |dx| / h)(1 - |dy| / h), 0 outside.
+float tent(int dx, int dy, int h)
+{
+    return max(1.0 - float(abs(dx)) / float(h), 0.0) * max(1.0 - float(abs(dy)) / float(h), 0.0);
+}
+
 // Whether the pixel q (position and view depth, normal) lies on the surface of the pixel at p
 // (normal n): near p's tangent plane, relative to p's depth, with a normal close to n's.
 bool same_surface(ivec2 q, vec4 p, vec3 n)
@@ -76,9 +85,9 @@ void main()
     vec4 p = imageLoad(gb_position, px);
     vec3 s0 = vec3(0.0), s1 = vec3(0.0), s2 = vec3(0.0), s3 = vec3(0.0);
     float count = 0.0, count_d = 0.0, taps = 0.0;
-    int rd = int(pc.stops.z), n = int(pc.split.x), r = int(pc.split.w);
-    // Per sub-image (class), how many of the kernel's pixels it has: the whole kernel's for
-    // indirect light, the inner rd's for direct light.
+    int h = int(pc.split.w), rd = int(pc.stops.z), n = int(pc.split.x);
+    // Per sub-image (class), the sum of its pixels' weights: the tent's for indirect light, the
+    // count of those in the inner box for direct light.
     float per[RB_BDPT_MAX_INTERLEAVE * RB_BDPT_MAX_INTERLEAVE];
     float per_d[RB_BDPT_MAX_INTERLEAVE * RB_BDPT_MAX_INTERLEAVE];
     for (int c = 0; c < n * n; c++) {
@@ -88,23 +97,22 @@ void main()
     vec3 nrm = vec3(0.0);
     if (p.w > 0.0) {
         nrm = imageLoad(gb_normal, px).xyz;
-        for (int dy = -r; dy <= r; dy++)
-            for (int dx = -r; dx <= r; dx++) {
+        for (int dy = 1 - h; dy < h; dy++)
+            for (int dx = 1 - h; dx < h; dx++) {
                 ivec2 q = px + ivec2(dx, dy);
                 if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size)) ||
                     imageLoad(i2, q).w <= 0.0 || !same_surface(q, p, nrm))
                     continue;
                 int c = (q.y % n) * n + q.x % n;
-                per[c] += 1.0;
-                if (abs(dx) <= rd && abs(dy) <= rd)
-                    per_d[c] += 1.0;
+                per[c] += tent(dx, dy, h);
+                per_d[c] += abs(dx) <= rd && abs(dy) <= rd ? 1.0 : 0.0;
             }
         for (int c = 0; c < n * n; c++) {
             count += per[c] > 0.0 ? 1.0 : 0.0;
             count_d += per_d[c] > 0.0 ? 1.0 : 0.0;
         }
-        for (int dy = -r; dy <= r && count > 0.0; dy++)
-            for (int dx = -r; dx <= r; dx++) {
+        for (int dy = 1 - h; dy < h && count > 0.0; dy++)
+            for (int dx = 1 - h; dx < h; dx++) {
                 ivec2 q = px + ivec2(dx, dy);
                 if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size)))
                     continue;
@@ -116,8 +124,9 @@ void main()
                     s0 += imageLoad(i0, q).rgb / per_d[c];
                     s1 += imageLoad(i1, q).rgb / per_d[c];
                 }
-                s2 += c2.rgb / per[c];
-                s3 += imageLoad(i3, q).rgb / per[c];
+                float wi = tent(dx, dy, h) / per[c];
+                s2 += c2.rgb * wi;
+                s3 += imageLoad(i3, q).rgb * wi;
                 taps += 1.0;
             }
     }

@@ -135,23 +135,40 @@ static void destroy(struct rb_integrator *it, void *state)
 /* Draw commands the shaders edit. */
 #define DRAWS (STORAGE | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT)
 
+/* Where sample i of K goes among the sequence's K points of a block: connect hands sample i to
+ * sub-image i mod m (m = n^2), so the sub-images' samples are made consecutive runs of the
+ * sequence, sub-image 0's first. A run of a (0, 2)-sequence is spread over the whole domain; the
+ * points i, i + m, i + 2m, ... that i mod m would give a sub-image share their m lowest strata
+ * (the bundles of one sub-image all near one latitude, its VPLs all from one strip of an
+ * emitter), and the sub-images' differences then stay in the image as a grid. */
+static uint32_t sample_rank(uint32_t i, uint32_t count, uint32_t m)
+{
+    uint32_t s = i % m, before = 0;
+    for (uint32_t t = 0; t < s; t++)
+        before += count > t ? (count - t + m - 1) / m : 0;
+    return before + i / m;
+}
+
 /* The fixed quasi-random table (BDPT.md "Sampling"), a block of rows per cache slot, host-
  * visible: in slot c's block, VPL i draws its light and its direction from row i, bundle i its
- * direction from row K_v + i, and they are points k K + i of their streams (K = K_v or K_b),
- * k = c when the samples are periodic. So the slots' subsets are disjoint, each one of the
- * sequence's runs, and together its first l K points. With fresh samples, frame f rewrites its
- * slot's block with k = f (new points every frame, as amortized sampling has them). A block is
- * padded to the device's storage offset alignment, since generate binds one. */
+ * direction from row K_v + i, and they are points k K + sample_rank(i) of their streams (K = K_v
+ * or K_b), k = c when the samples are periodic. So the slots' subsets are disjoint, each one of
+ * the sequence's runs, and together its first l K points, and each sub-image's subset of a slot
+ * is a run too. With fresh samples, frame f rewrites its slot's block with k = f (new points
+ * every frame, as amortized sampling has them). A block is padded to the device's storage offset
+ * alignment, since generate binds one. */
 static void fill_samples(struct rb_bdpt_frame *b, uint32_t slot, uint32_t block)
 {
+    uint32_t m = b->interleave * b->interleave;
     uint32_t rows = b->vpl_count + b->bundle_count;
     struct rb_gpu_bdpt_sample *s =
         (struct rb_gpu_bdpt_sample *)((char *)b->samples.mapped + slot * b->sample_block_bytes);
     for (uint32_t i = 0; i < rows; i++) {
         uint32_t u[2], l[2];
         bool is_vpl = i < b->vpl_count;
-        uint32_t index =
-            is_vpl ? block * b->vpl_count + i : block * b->bundle_count + (i - b->vpl_count);
+        uint32_t index = is_vpl ? block * b->vpl_count + sample_rank(i, b->vpl_count, m)
+                                : block * b->bundle_count +
+                                      sample_rank(i - b->vpl_count, b->bundle_count, m);
         if (is_vpl) {
             rb_qmc_point2(STREAM_VPL_LIGHT, index, l);
             rb_qmc_point2(STREAM_VPL_DIRECTION, index, u);

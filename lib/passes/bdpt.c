@@ -216,14 +216,16 @@ static uint32_t groups(uint32_t n, uint32_t size)
     return (n + size - 1) / size;
 }
 
+/* The filter's kernels (bdpt_filter.comp): for indirect light a tent of half-width h, the
+ * radius rounded to a multiple of the interleave n (at least n); for direct light a box of
+ * radius n / 2, one interleave block; the pixel alone with radius 0. */
 static struct rb_gpu_bdpt_image_push image_push(const struct rb_bdpt_frame *b)
 {
+    uint32_t n = b->interleave, r = b->filter_radius_px, m = (r + n / 2) / n;
+    uint32_t h = r ? n * (m > 1 ? m : 1) : 1, rd = r ? n / 2 : 0;
     return (struct rb_gpu_bdpt_image_push){
-        .split = {b->interleave, b->sub_width_px, b->sub_height_px, b->filter_radius_px},
-        .stops = {b->filter_depth, b->filter_normal,
-                  (float)(b->filter_radius_px < b->interleave / 2 ? b->filter_radius_px
-                                                                  : b->interleave / 2),
-                  0.0f},
+        .split = {n, b->sub_width_px, b->sub_height_px, h},
+        .stops = {b->filter_depth, b->filter_normal, (float)rd, 0.0f},
     };
 }
 

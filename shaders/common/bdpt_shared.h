@@ -134,9 +134,10 @@ struct rb_gpu_bdpt_history {
 
 /* Push constants of the split, gather and filter passes. */
 struct rb_gpu_bdpt_image_push {
-    RB_UVEC4(split);  /* n, sub-image width, height, filter radius */
-    RB_VEC4(stops);   /* depth threshold, normal threshold, the direct light's filter radius
-                       * (the radius, at most n / 2: one interleave block), unused */
+    RB_UVEC4(split);  /* n, sub-image width, height, the filter's tent half-width h for
+                       * indirect light (a multiple of n; 1: no filter) */
+    RB_VEC4(stops);   /* depth threshold, normal threshold, the box radius for direct light
+                       * (n / 2, one interleave block; 0: no filter), unused */
 };
 
 /* ---- the MIS weights (BDPT.md "As implemented"), one definition for GLSL and C: the connect
@@ -175,6 +176,20 @@ RB_BDPT_FN float rb_bdpt_balance(float n_s, float p_s, float n_o, float p_o)
 {
     float s = n_s * p_s, o = n_o * p_o;
     return s > 0.0f ? s / (s + o) : 0.0f;
+}
+
+/* The power heuristic (exponent 2) over the same counts and densities: the weight a VPL and its
+ * bounce take for the paths they both make (BDPT.md "Two bounces"). Neither samples the BRDFs
+ * the connection passes through, so where both densities are moderate the balance heuristic
+ * keeps half of a bounce that lands beside a glossy surface and lights a patch of floor through
+ * it; squaring hands each path more firmly to the strategy with the larger density. */
+RB_BDPT_FN float rb_bdpt_power(float n_s, float p_s, float n_o, float p_o)
+{
+    float s = n_s * p_s, o = n_o * p_o;
+    if (!(s > 0.0f))
+        return 0.0f;
+    float t = o / s; /* as a ratio, so that squaring a density near a singularity cannot overflow */
+    return 1.0f / (1.0f + t * t);
 }
 
 /* Strategies, as enum rb_bdpt_strategies. */

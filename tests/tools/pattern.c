@@ -4,11 +4,13 @@
  * a depth within 5% of its own, from the file's normal and depth layers) and not in the dark
  * (its local mean above a tenth of the median), its relative departure from the local mean of
  * LAYER's luminance, (L - m) / m, m the mean over the (2R + 1)^2 pixels around it weighted so
- * that every class counts the same (so m does not contain the grid it measures); then the mean
- * departure of each class. A smooth image has every class mean near 0 (a linear gradient
- * cancels); a grid shows as classes above or below. Prints the spread (largest class mean minus
- * smallest) as "pattern SPREAD", then the N x N class means in percent, and the fraction of the
- * pixels measured. LAYER "" is the beauty (R, G, B). */
+ * that every class counts the same (so m does not contain the grid it measures); then the
+ * median departure of each class. A grid moves every pixel of a class, and so its median; a
+ * shadow's edge moves the few pixels beside it a long way, which would swing a mean by where
+ * the edge falls among the classes, but not the median. A smooth image has every class median
+ * near 0 (a linear gradient cancels). Prints the spread (largest class median minus smallest)
+ * as "pattern SPREAD", then the N x N class medians in percent, and the fraction of the pixels
+ * measured. LAYER "" is the beauty (R, G, B). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -103,24 +105,30 @@ int main(int argc, char **argv)
         qsort(means, measured, sizeof(double), compare_doubles);
         median = means[measured / 2];
     }
-    double class_sum[64] = {0}, class_count[64] = {0};
-    size_t used = 0;
+    /* each class's departures, then their medians */
+    double *dep[64];
+    size_t dep_count[64] = {0}, used = 0;
+    for (int k = 0; k < n * n; k++)
+        if (!(dep[k] = malloc(sizeof(double) * (count / (size_t)(n * n) + (size_t)w + 1))))
+            return 1;
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
             size_t i = (size_t)y * w + x;
             if (!inside[i] || !(mean[i] > 0.1 * median))
                 continue;
             int k = (y % n) * n + x % n;
-            class_sum[k] += (lum[i] - mean[i]) / mean[i];
-            class_count[k] += 1.0;
+            dep[k][dep_count[k]++] = (lum[i] - mean[i]) / mean[i];
             used++;
         }
-    double lo = INFINITY, hi = -INFINITY;
+    double class_median[64] = {0}, lo = INFINITY, hi = -INFINITY;
     for (int k = 0; k < n * n; k++) {
-        double m = class_count[k] > 0.0 ? class_sum[k] / class_count[k] : 0.0;
-        class_sum[k] = m;
-        lo = fmin(lo, m);
-        hi = fmax(hi, m);
+        if (dep_count[k]) {
+            qsort(dep[k], dep_count[k], sizeof(double), compare_doubles);
+            class_median[k] = dep[k][dep_count[k] / 2];
+        }
+        lo = fmin(lo, class_median[k]);
+        hi = fmax(hi, class_median[k]);
+        free(dep[k]);
     }
     if (!used) {
         fprintf(stderr, "pattern: no pixel of '%s' lies inside a lit surface\n", argv[1]);
@@ -129,7 +137,7 @@ int main(int argc, char **argv)
     printf("pattern %.6f\n", hi - lo);
     for (int y = 0; y < n; y++) {
         for (int x = 0; x < n; x++)
-            printf("%s%+.3f", x ? " " : "# ", 100.0 * class_sum[y * n + x]);
+            printf("%s%+.3f", x ? " " : "# ", 100.0 * class_median[y * n + x]);
         printf("\n");
     }
     printf("# measured %.3f of the pixels\n", (double)used / (double)count);

@@ -155,10 +155,12 @@ static void test_bounce(void **state)
 }
 
 /* Two-bounce paths y0 -> z -> z1 -> x1 (BDPT.md "Two bounces"): (c), VPL z and the bundle from
- * x1 finding z1, against (a) of z's bounce z1 (a cosine-distributed direction from z). Whatever
- * the distance r from z to z1, (c)'s weight times its geometry term G(z, z1) = cos_z cos_z1 / r^2
- * stays below pi (n_c / n_a) p_B(z1 | x1): the singularity a clamp used to bound is gone, and
- * the weight falls to 0 as z1 nears z, where the bounce takes the paths over. */
+ * x1 finding z1, against (a) of z's bounce z1 (a cosine-distributed direction from z), weighed
+ * by the power heuristic: the two weights sum to one, and whatever the distance r from z to z1,
+ * (c)'s weight times its geometry term G(z, z1) = cos_z cos_z1 / r^2 stays below
+ * pi (n_c / n_a) p_B(z1 | x1) (the power weight is at most the ratio of the two sides): the
+ * singularity a clamp used to bound is gone, and the weight falls to 0 as z1 nears z, where the
+ * bounce takes the paths over. */
 static void test_two_bounce(void **state)
 {
     (void)state;
@@ -176,8 +178,9 @@ static void test_two_bounce(void **state)
         float n_c = (float)(1 + (int)(uniform(&rng) * 8.0f));
         if (!(p_bundle > 0.0f && p_bounce > 0.0f))
             continue;
-        float wc = rb_bdpt_balance(n_c, p_bundle, n_a, p_bounce);
-        float wa = rb_bdpt_balance(n_a, p_bounce, n_c, p_bundle);
+        float wc = rb_bdpt_power(n_c, p_bundle, n_a, p_bounce);
+        float wa = rb_bdpt_power(n_a, p_bounce, n_c, p_bundle);
+        assert_true(wa >= 0.0f && wa <= 1.0f && wc >= 0.0f && wc <= 1.0f);
         assert_true(fabs((double)wa + (double)wc - 1.0) < 1e-6);
         double g = (double)cos_z * cos_z1 / ((double)r * r);
         double bound = RB_PI * n_c / n_a * p_bundle;
@@ -185,7 +188,7 @@ static void test_two_bounce(void **state)
     }
     /* Nearer and nearer: the weight of (c) goes to 0. */
     float p_bundle = rb_bdpt_bundle_density(0.7f, 1.0f);
-    float near = rb_bdpt_balance(1.0f, p_bundle, 1.0f, rb_bdpt_bounce_density(0.7f, 0.7f, 1e-6f));
+    float near = rb_bdpt_power(1.0f, p_bundle, 1.0f, rb_bdpt_bounce_density(0.7f, 0.7f, 1e-6f));
     assert_true(near < 1e-5f);
 }
 

@@ -1,0 +1,63 @@
+#!/bin/sh
+# bdpt at the seed's budget (21 VPLs, 21 bundles, 4 temporal caches, the defaults), held to the
+# reference in bdpt's path space:
+# - the demo at 320x180, frames 3 to 6 (where a punctual light's VPL in the box's corner once made
+#   a blotch of indirect R = 57.6 that lasted four frames: relMSE 0.83 at frame 4) and frame 11,
+#   each within relMSE 0.03 of the reference at 512 samples a pixel, every value finite;
+# - the still, area-lit Cornell box once its caches are full: no 4x4 grid of the interleaved
+#   sub-images above 0.5% of the local brightness in the beauty, 1% in its direct and indirect
+#   layers (tests/tools/pattern; the plain mean over the filter's kernel left 15.4%), its steady
+#   state the same bits from frame to frame, and within relMSE 0.03 of a converged reference.
+. tests/integration/lib.sh
+
+rb render jobs/demo.yaml --integrator bdpt --size 320x180 --frames 0-11 -q --out "$T/d"
+expect_exit 0 "bdpt renders the demo's frames 0-11 at 320x180"
+rb reference jobs/demo.yaml --size 320x180 --frames 3-6,11 --spp 512 -q \
+    --set integrator.reference.paths=bdpt --out "$T/r"
+expect_exit 0 "the reference renders frames 3-6 and 11 in bdpt's path space"
+for f in 3 4 5 6 11; do
+    name=$(printf 'frame.%04d.exr' "$f")
+    tap_run "$BUILD/tests/tools/exrstat" "$T/d/$name" indirect.G 0.01
+    e=$("$RB" compare "$T/d/$name" "$T/r/$name" --json |
+        sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p')
+    ei=$("$RB" compare "$T/d/$name" "$T/r/$name" --layer indirect --json |
+        sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p')
+    echo "# demo frame $f: relMSE $e (indirect $ei)"
+    check "demo frame $f is within relMSE 0.03 of the reference ($e)" \
+        awk "BEGIN { exit !($e != \"\" && $e < 0.03) }"
+done
+
+if have_scene cornell-box/CornellBox.glb; then
+    box="$SCENES/cornell-box/CornellBox.glb"
+    rb render "$box" --integrator bdpt --size 128x128 --frames 0-7 -q --out "$T/c"
+    expect_exit 0 "bdpt renders the still Cornell box's frames 0-7"
+    check "the steady state is the same bits from frame 6 to frame 7" \
+        sh -c "\"$BUILD/tests/tools/samebits\" \"$T/c/frame.0006.exr\" \"$T/c/frame.0007.exr\" >/dev/null"
+    for layer in "" direct indirect; do
+        "$BUILD/tests/tools/pattern" "$T/c/frame.0007.exr" "$layer" 4 >"$T/pattern" 2>&1
+        p=$(sed -n 's/^pattern \([0-9.e+-]*\)$/\1/p' "$T/pattern")
+        sed 's/^/# /' "$T/pattern"
+        if [ -z "$layer" ]; then
+            check "the Cornell box's beauty shows no 4x4 grid above 0.5% ($p)" \
+                awk "BEGIN { exit !(\"$p\" != \"\" && $p < 0.005) }"
+        else
+            check "the Cornell box's $layer light shows no 4x4 grid above 1% ($p)" \
+                awk "BEGIN { exit !(\"$p\" != \"\" && $p < 0.01) }"
+        fi
+    done
+    rb reference "$box" --size 128x128 --frames 7 --spp 2048 -q \
+        --set integrator.reference.paths=bdpt --out "$T/cr"
+    expect_exit 0 "the reference renders the Cornell box at 2048 samples a pixel"
+    for layer in beauty direct indirect; do
+        e=$("$RB" compare "$T/c/frame.0007.exr" "$T/cr/frame.0007.exr" --layer $layer --json |
+            sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p')
+        echo "# Cornell box, caches full: $layer relMSE $e"
+        [ "$layer" = beauty ] && eb=$e
+    done
+    check "the Cornell box is within relMSE 0.03 of the reference ($eb)" \
+        awk "BEGIN { exit !($eb != \"\" && $eb < 0.03) }"
+else
+    skip "the Cornell box's quality" "$SCENES/cornell-box/CornellBox.glb is not there"
+fi
+
+done_testing
