@@ -166,9 +166,9 @@ static void fill_samples(struct rb_bdpt_frame *b, uint32_t slot, uint32_t block)
     for (uint32_t i = 0; i < rows; i++) {
         uint32_t u[2], l[2];
         bool is_vpl = i < b->vpl_count;
-        uint32_t index = is_vpl ? block * b->vpl_count + sample_rank(i, b->vpl_count, m)
-                                : block * b->bundle_count +
-                                      sample_rank(i - b->vpl_count, b->bundle_count, m);
+        uint32_t index =
+            is_vpl ? block * b->vpl_count + sample_rank(i, b->vpl_count, m)
+                   : block * b->bundle_count + sample_rank(i - b->vpl_count, b->bundle_count, m);
         if (is_vpl) {
             rb_qmc_point2(STREAM_VPL_LIGHT, index, l);
             rb_qmc_point2(STREAM_VPL_DIRECTION, index, u);
@@ -804,7 +804,7 @@ static void record_cache(struct rb_integrator *it, struct bdpt *d, VkCommandBuff
 
 /* What reproject and reconstruct read of the caches this frame, by age (the cache written a
  * frames ago) and by slot. A cache counts when its slot holds frame f - a, written in this
- * run (a warm-up included) and not before the sequence's start. */
+ * run (a warm-up included) and not before the sequence's start, unless the job fills before it. */
 static void write_history(const struct rb_integrator *it, struct bdpt *d, int f)
 {
     const struct rb_bdpt_frame *b = &d->b;
@@ -900,7 +900,8 @@ static void record_reconstruct(struct rb_integrator *it, struct bdpt *d, VkComma
  * (at its subpixel offset); the caches' reconstruction and output. A warm-up frame stops after
  * its cache, and fills one only when later frames read it (l > 1) and it is not before the
  * sequence's start (the job file's first frame): a chunk's first frame then has the caches the
- * same frame of a whole run has. */
+ * same frame of a whole run has. A quick look fills them before its start too
+ * (fill_before_start), so that a still scene's one frame is the steady state. */
 static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
                    const struct rb_frame_ctx *ctx)
 {
@@ -909,7 +910,8 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
     uint32_t l = b->cache_count, slot = wrap(ctx->frame, l);
     remember_camera(it, d, ctx);
     rb_base_record_animate(it, d->base.animate, cmd, ctx->cur);
-    if (ctx->is_warmup && (l == 1 || ctx->frame < it->job->sequence_start)) {
+    if (ctx->is_warmup &&
+        (l == 1 || (ctx->frame < it->job->sequence_start && !it->job->fill_before_start))) {
         d->written[slot] = INT_MIN;
         return;
     }

@@ -205,7 +205,9 @@ static const struct key keys[] = {
     K("integrator.bdpt.filter_radius", KT_UINT, JOB(integrator.bdpt.filter_radius_px), 0, 16, "4",
       0, "bdpt: geometry-aware filter radius in pixels; 0: no filter"),
     K("integrator.bdpt.filter_depth", KT_FLOAT, JOB(integrator.bdpt.filter_depth), 0, NOHI, "0.05",
-      0, "bdpt: distance from a pixel's tangent plane, relative to its depth, at which the filter stops"),
+      0,
+      "bdpt: distance from a pixel's tangent plane, relative to its depth, at which the filter "
+      "stops"),
     K("integrator.bdpt.filter_normal", KT_FLOAT, JOB(integrator.bdpt.filter_normal), -1, 1, "0.9",
       0, "bdpt: cosine between normals below which the filter stops"),
     K("integrator.bdpt.clamp", KT_FLOAT, JOB(integrator.bdpt.clamp), 0, NOHI, "100", 0,
@@ -1254,6 +1256,7 @@ void rb_job_rehash(struct rb_job *job)
     h = h_u32(h, job->height_px);
     h = h_u32(h, job->layer_mask);
     h = h_f64(h, job->rate_fps);
+    h = h_u32(h, job->fill_before_start);
 
     enum rb_interp interp =
         job->camera.interpolation ? job->camera.interpolation : RB_INTERP_CATMULL_ROM;
@@ -1464,6 +1467,7 @@ static enum rb_status quick_look(const char *path, const struct rb_job_override 
     c.marks[key_index("scene")] = (struct mark){NULL, 0, 0, ++c.seq};
     c.marks[key_index("output")] = (struct mark){NULL, 0, 0, ++c.seq};
     c.job->sequence_start = c.job->frame_start;
+    c.job->fill_before_start = true;
     if ((st = apply_overrides(&c, overrides, override_count)))
         goto out;
     if ((st = validate(&c)))

@@ -106,6 +106,10 @@ struct rb_job {
     int sequence_start;         /* frames.start as the job file has it, before the command line's
                                  * overrides (--frames, --set): where the sequence begins, which a
                                  * chunk or a frame list does not move */
+    bool fill_before_start;     /* a quick look: the frames bdpt warms up on before the sequence's
+                                 * start fill its caches too, so its first frame is its steady
+                                 * state (a job file's first frame has only its own cache, as a
+                                 * sequence's first frame has) */
     double rate_fps;
 
     struct {

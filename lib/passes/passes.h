@@ -332,17 +332,17 @@ struct rb_bdpt_frame {
     float scene_centre[3], scene_radius; /* the job's bounds */
     uint32_t emitter_count;              /* emissive triangles */
     float punctual_power;                /* W: the punctual lights' that have VPLs, this frame */
-    bool has_bounce; /* VPLs probe for their bounces: VPLs K_v..2 K_v - 1 */
-    bool has_chain;  /* and the emitters' bounces for theirs: VPLs 2 K_v..3 K_v - 1 */
+    bool has_bounce;                     /* VPLs probe for their bounces: VPLs K_v..2 K_v - 1 */
+    bool has_chain; /* and the emitters' bounces for theirs: VPLs 2 K_v..3 K_v - 1 */
 
-    struct rb_gpu_buffer bounds;       /* lo[4], hi[4]: the G-buffer's box (bdpt_bounds.comp) */
-    struct rb_gpu_buffer samples;      /* struct rb_gpu_bdpt_sample [K_v + K_b] */
-    struct rb_gpu_buffer lights;       /* struct rb_gpu_bdpt_light per light, host-visible */
-    struct rb_gpu_buffer vpls;         /* struct rb_gpu_vpl [K_v], [2 K_v] or [3 K_v] with bounces */
-    struct rb_gpu_buffer vpl_views;    /* struct rb_gpu_view, as vpls: paraboloid */
-    struct rb_gpu_buffer probe_views;  /* struct rb_gpu_view [K_v]: perspective, 1x1 */
-    struct rb_gpu_buffer vpl_draws;    /* VkDrawIndexedIndirectCommand, as vpls */
-    struct rb_gpu_buffer probe_draws;  /* VkDrawIndexedIndirectCommand [K_v] */
+    struct rb_gpu_buffer bounds;      /* lo[4], hi[4]: the G-buffer's box (bdpt_bounds.comp) */
+    struct rb_gpu_buffer samples;     /* struct rb_gpu_bdpt_sample [K_v + K_b] */
+    struct rb_gpu_buffer lights;      /* struct rb_gpu_bdpt_light per light, host-visible */
+    struct rb_gpu_buffer vpls;        /* struct rb_gpu_vpl [K_v], [2 K_v] or [3 K_v] with bounces */
+    struct rb_gpu_buffer vpl_views;   /* struct rb_gpu_view, as vpls: paraboloid */
+    struct rb_gpu_buffer probe_views; /* struct rb_gpu_view [K_v]: perspective, 1x1 */
+    struct rb_gpu_buffer vpl_draws;   /* VkDrawIndexedIndirectCommand, as vpls */
+    struct rb_gpu_buffer probe_draws; /* VkDrawIndexedIndirectCommand [K_v] */
     struct rb_gpu_buffer bundle_views; /* struct rb_gpu_view [K_b]: orthographic */
     struct rb_gpu_buffer emitters;     /* struct rb_gpu_bdpt_emitter [emitter_count] */
     struct rb_gpu_buffer emit_info;    /* struct rb_gpu_bdpt_emit_info */

@@ -75,7 +75,7 @@ int main(int argc, char **argv)
     double *means = malloc(sizeof(double) * count);
     if (!lum || !mean || !inside || !means)
         return 1;
-#define AT(x, y, ch) img.pixels[((size_t)(y) * w + (x)) * img.channel_count + (size_t)(ch)]
+#define AT(x, y, ch) img.pixels[((size_t)(y)*w + (x)) * img.channel_count + (size_t)(ch)]
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++)
             lum[(size_t)y * w + x] = (AT(x, y, c[0]) + AT(x, y, c[1]) + AT(x, y, c[2])) / 3.0;

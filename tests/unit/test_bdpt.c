@@ -195,10 +195,8 @@ static void test_two_bounce(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_weights_sum_to_one),
-        cmocka_unit_test(test_limits),
-        cmocka_unit_test(test_densities),
-        cmocka_unit_test(test_bounce),
+        cmocka_unit_test(test_weights_sum_to_one), cmocka_unit_test(test_limits),
+        cmocka_unit_test(test_densities),          cmocka_unit_test(test_bounce),
         cmocka_unit_test(test_two_bounce),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
