@@ -1,6 +1,7 @@
 // bdpt, filter (seed 000, A.1; Segovia et al. 2006): the geometry-aware filter that combines the
 // neighbouring pixels' sample subsets. A pixel takes the gathered light of the pixels around it
-// that saw samples (w of the indirect diffuse image: 1) and lie on its surface: within the depth
+// that saw samples (the first of the sub-images, as many as the frame has iterations) and lie
+// on its surface: within the depth
 // threshold (relative to its depth) of its tangent plane, so that a wall seen at a grazing angle
 // keeps its whole kernel, and with normals whose cosine to its own is at least the normal
 // threshold. It combines them sub-image by sub-image (the n x n classes of pixel positions mod
@@ -85,7 +86,7 @@ void main()
     vec4 p = imageLoad(gb_position, px);
     vec3 s0 = vec3(0.0), s1 = vec3(0.0), s2 = vec3(0.0), s3 = vec3(0.0);
     float count = 0.0, count_d = 0.0, taps = 0.0;
-    int h = int(pc.split.w), rd = int(pc.stops.z), n = int(pc.split.x);
+    int h = int(pc.split.w), rd = int(pc.stops.z), n = int(pc.split.x), sampled = int(pc.stops.w);
     // Per sub-image (class), the sum of its pixels' weights: the tent's for indirect light, the
     // count of those in the inner box for direct light.
     float per[RB_BDPT_MAX_INTERLEAVE * RB_BDPT_MAX_INTERLEAVE];
@@ -94,38 +95,41 @@ void main()
         per[c] = 0.0;
         per_d[c] = 0.0;
     }
-    vec3 nrm = vec3(0.0);
+    // The kernel's rows as bit masks of the pixels on the surface (at most 2 x 16 - 1 wide:
+    // the job's largest radius), so the second sweep reads no G-buffer again.
+    uint rows[2 * RB_BDPT_MAX_FILTER - 1];
     if (p.w > 0.0) {
-        nrm = imageLoad(gb_normal, px).xyz;
-        for (int dy = 1 - h; dy < h; dy++)
+        vec3 nrm = imageLoad(gb_normal, px).xyz;
+        for (int dy = 1 - h; dy < h; dy++) {
+            uint bits = 0u;
             for (int dx = 1 - h; dx < h; dx++) {
                 ivec2 q = px + ivec2(dx, dy);
-                if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size)) ||
-                    imageLoad(i2, q).w <= 0.0 || !same_surface(q, p, nrm))
-                    continue;
+                // (the first `sampled` sub-images saw samples, every pixel of them)
                 int c = (q.y % n) * n + q.x % n;
+                if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size)) ||
+                    c >= sampled || !same_surface(q, p, nrm))
+                    continue;
+                bits |= 1u << uint(dx + h - 1);
                 per[c] += tent(dx, dy, h);
                 per_d[c] += abs(dx) <= rd && abs(dy) <= rd ? 1.0 : 0.0;
             }
+            rows[dy + h - 1] = bits;
+        }
         for (int c = 0; c < n * n; c++) {
             count += per[c] > 0.0 ? 1.0 : 0.0;
             count_d += per_d[c] > 0.0 ? 1.0 : 0.0;
         }
-        for (int dy = 1 - h; dy < h && count > 0.0; dy++)
-            for (int dx = 1 - h; dx < h; dx++) {
+        for (int dy = 1 - h; dy < h; dy++)
+            for (uint bits = rows[dy + h - 1]; bits != 0u; bits &= bits - 1u) {
+                int dx = findLSB(bits) - (h - 1);
                 ivec2 q = px + ivec2(dx, dy);
-                if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size)))
-                    continue;
-                vec4 c2 = imageLoad(i2, q);
-                if (c2.w <= 0.0 || !same_surface(q, p, nrm))
-                    continue;
                 int c = (q.y % n) * n + q.x % n;
                 if (abs(dx) <= rd && abs(dy) <= rd) {
                     s0 += imageLoad(i0, q).rgb / per_d[c];
                     s1 += imageLoad(i1, q).rgb / per_d[c];
                 }
                 float wi = tent(dx, dy, h) / per[c];
-                s2 += c2.rgb * wi;
+                s2 += imageLoad(i2, q).rgb * wi;
                 s3 += imageLoad(i3, q).rgb * wi;
                 taps += 1.0;
             }

@@ -223,9 +223,14 @@ static struct rb_gpu_bdpt_image_push image_push(const struct rb_bdpt_frame *b)
 {
     uint32_t n = b->interleave, r = b->filter_radius_px, m = (r + n / 2) / n;
     uint32_t h = r ? n * (m > 1 ? m : 1) : 1, rd = r ? n / 2 : 0;
+    while (h > RB_BDPT_MAX_FILTER) /* the shader's row masks */
+        h -= n;
+    /* sub-image s sees iteration k when k mod n^2 = s: the first min(n^2, max(K_v, K_b)) */
+    uint32_t loops = b->vpl_count > b->bundle_count ? b->vpl_count : b->bundle_count;
+    uint32_t active = loops < n * n ? loops : n * n;
     return (struct rb_gpu_bdpt_image_push){
         .split = {n, b->sub_width_px, b->sub_height_px, h},
-        .stops = {b->filter_depth, b->filter_normal, (float)rd, 0.0f},
+        .stops = {b->filter_depth, b->filter_normal, (float)rd, (float)active},
     };
 }
 

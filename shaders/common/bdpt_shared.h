@@ -109,8 +109,12 @@ struct rb_gpu_bdpt_bounce_push {
     RB_VEC4(scene);   /* xyz: the centre of the job's bounds; w: their radius */
 };
 
-/* Spatial interleaving (seed 000, A.1): at most this many sub-images along each axis. */
+/* Spatial interleaving (seed 000, A.1): at most this many sub-images along each axis, and a
+ * filter radius of at most this many pixels (the job's bounds on interleave and filter_radius;
+ * the indirect tent's half-width, the radius rounded to a multiple of the interleave, is at most
+ * 16 too, since a larger multiple is never nearer). */
 #define RB_BDPT_MAX_INTERLEAVE 8
+#define RB_BDPT_MAX_FILTER 16
 
 /* The temporal caches (seed 000, section A; DESIGN.md "Temporal interleaved sampling"): at most
  * this many, one reprojection target each. */
@@ -137,7 +141,8 @@ struct rb_gpu_bdpt_image_push {
     RB_UVEC4(split);  /* n, sub-image width, height, the filter's tent half-width h for
                        * indirect light (a multiple of n; 1: no filter) */
     RB_VEC4(stops);   /* depth threshold, normal threshold, the box radius for direct light
-                       * (n / 2, one interleave block; 0: no filter), unused */
+                       * (n / 2, one interleave block; 0: no filter), the sub-images that saw
+                       * samples (the first min(n^2, max(K_v, K_b))) */
 };
 
 /* ---- the MIS weights (BDPT.md "As implemented"), one definition for GLSL and C: the connect
