@@ -10,6 +10,11 @@
 #     bundles beside the reference at 4 to 256 spp, all against the reference at 4096 spp; the
 #     reference's relMSE-against-time power law, fitted, gives the time it needs for each bdpt
 #     error (goal: >= 20x bdpt's), and bdpt's error floor (its bias) is said when K finds one.
+#  4. Quality at the budget (the defaults: 21 VPLs + 21 bundles, 4 caches): the demo at 320x180,
+#     every frame from 3 to 23 against the reference at 512 spp (goal: each <= 0.03), and the
+#     still Cornell box at 128x128 once its caches are full against the truth of 3., with the 4x4
+#     grid the interleaved sub-images leave (tests/tools/pattern; goal: <= 0.5% of the local
+#     brightness) and the error with each source turned off or up.
 # Sizes are small so that make bench takes about 11 minutes on two shared cores.
 #
 #   BUILD=build sh tests/bench-bdpt.sh
@@ -29,10 +34,12 @@ load=$(cut -d' ' -f1 /proc/loadavg)
 
 if [ "${RB_BENCH_QUICK:-0}" = 1 ]; then
     k=2 size=32x18 frames=1 budget_spp=4 curve_size=16x16 truth_spp=16 curve_spp="1 4" ks="1 2"
+    quality_size=32x18 quality_frames="3 4" quality_spp=4
 else
     k=21 # VPLs and bundles of the frame-time budget
     size=640x360 frames=5 budget_spp=64 curve_size=128x128 truth_spp=4096 curve_spp="4 16 64 256"
     ks="21 64 256"
+    quality_size=320x180 quality_frames=$(seq 3 23) quality_spp=512
 fi
 last=$((frames - 1))
 
@@ -192,6 +199,49 @@ if $has_cornell; then
                     printf "still falling, no floor in sight at K=%d\n", kk[m]
             }
         }' "$out/reference.txt" "$out/bdpt.txt"
+fi
+
+# ---- 4. quality at the budget --------------------------------------------------------------
+
+first=$(echo $quality_frames | cut -d' ' -f1)
+final=$(echo $quality_frames | tr ' ' '\n' | tail -n 1)
+render jobs/demo.yaml "$out/quality" --integrator bdpt --size "$quality_size" --frames "0-$final"
+list=$(echo $quality_frames | tr ' ' ',')
+reference jobs/demo.yaml "$out/quality-ref" --size "$quality_size" --frames "$list" \
+    --spp "$quality_spp"
+echo "bdpt quality, demo $quality_size at the defaults, frames $first-$final against the reference" \
+    "at $quality_spp spp (goal: each <= 0.03):"
+for f in $quality_frames; do
+    name=$(printf 'frame.%04d.exr' "$f")
+    echo "$f $(relmse "$out/quality/$name" "$out/quality-ref/$name")" \
+        "$(relmse "$out/quality/$name" "$out/quality-ref/$name" indirect)"
+done | awk '{ printf "  demo frame %d: relMSE %.4f (indirect layer %.4f)\n", $1, $2, $3
+              if ($2 > worst) { worst = $2; at = $1 } }
+            END { printf "  demo worst frame: %d, relMSE %.4f\n", at, worst }'
+if $has_cornell; then
+    # The Cornell box's still frame once every cache is written, against the truth of 3.
+    # ($truth, frame 9 of the same job), and with each source of error turned off or up.
+    cornell_last=9
+    echo "bdpt quality, cornell-box $curve_size, frame $cornell_last (every cache full), against" \
+        "the truth of 3.:"
+    while read -r label options; do
+        # shellcheck disable=SC2086
+        render "$out/cornell.yaml" "$out/q-$label" --frames "0-$cornell_last" $options
+        image="$out/q-$label/frame.000$cornell_last.exr"
+        # (an image too small to hold a surface's interior has no grid figure)
+        grid=$("$BUILD/tests/tools/pattern" "$image" "" 4 2>/dev/null | sed -n 's/^pattern //p')
+        grid=$(awk -v p="$grid" 'BEGIN { if (p == "") print "none"; else printf "%.2f%%", 100 * p }')
+        printf '  %-20s relMSE %.4f (direct %.4f, indirect %.4f); 4x4 grid %s\n' "$label" \
+            "$(relmse "$image" "$truth")" "$(relmse "$image" "$truth" direct)" \
+            "$(relmse "$image" "$truth" indirect)" "$grid"
+    done <<EOT
+defaults
+x4-VPLs-and-bundles --set integrator.bdpt.vpls=84 --set integrator.bdpt.bundles=84
+no-interleave --set integrator.bdpt.interleave=1
+no-filter --set integrator.bdpt.filter_radius=0
+bundle-grid-1024 --set integrator.bdpt.bundle_size=1024
+vpl-maps-1024 --set integrator.bdpt.vpl_size=1024
+EOT
 fi
 
 awk -v s="$start" -v e="$(date +%s)" -v l0="$load" -v l1="$(cut -d' ' -f1 /proc/loadavg)" \

@@ -38,6 +38,14 @@ for k in 1 2; do
     stdout_has "^  bdpt K=$k: relMSE $x in $x s; the reference" "bdpt's error and time at K=$k"
 done
 stdout_has "^  bdpt relMSE from K=1 to K=2: x$x (1/K: x0.50): " "whether bdpt levels off"
+for f in 3 4; do
+    stdout_has "^  demo frame $f: relMSE $x (indirect layer $x)$" "the demo's quality at frame $f"
+done
+stdout_has "^  demo worst frame: [34], relMSE $x$" "the demo's worst frame"
+for label in defaults x4-VPLs-and-bundles no-interleave no-filter bundle-grid-1024 vpl-maps-1024; do
+    stdout_has "^  $label  *relMSE $x (direct $x, indirect $x); 4x4 grid \($x%\|none\)$" \
+        "the Cornell box's quality: $label"
+done
 stdout_has "^bdpt bench took $x min; load average" "the bench's own time and the machine's load"
 check "no figure is NaN or infinite" sh -c "! grep -qiE '(^|[^a-z])-?(nan|inf)([^a-z]|$)' '$T/stdout'"
 
