@@ -194,7 +194,7 @@ if $has_cornell; then
                 f = be[m] / be[m - 1]; g = kk[m - 1] / kk[m]
                 printf "  bdpt relMSE from K=%d to K=%d: x%.2f (1/K: x%.2f): ", kk[m - 1], kk[m], f, g
                 if (f > sqrt(g))
-                    printf "slower than 1/sqrt(K), its bias dominates (in this path space: 8-bit materials, the clamp, the filter, shadow-map and bundle resolution): bdpt levels off near %.2e, and the ratios above are at bdpt'"'"'s own errors\n", be[m]
+                    printf "slower than 1/sqrt(K), its bias dominates (in this path space: 8-bit materials, the filter, shadow-map and bundle resolution): bdpt levels off near %.2e, and the ratios above are at bdpt'"'"'s own errors\n", be[m]
                 else
                     printf "still falling, no floor in sight at K=%d\n", kk[m]
             }
