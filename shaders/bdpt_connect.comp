@@ -118,7 +118,10 @@ vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, out vec3 l, out flo
 }
 
 // The light z1 reflects towards x1 (direction v) from the punctual lights, each weighted
-// against VPLs finding z1 (pdf_bundle: the bundle's area density of z1 seen from x1).
+// against VPLs finding z1 (pdf_bundle: the bundle's area density of z1 seen from x1). The shadow
+// test is one texel, a hard shadow: the VPLs that make the same paths see z1 through the light's
+// reflective shadow map, hard too, and so does a point light (16-tap PCF cost the connect pass a
+// quarter of its time on the demo and blurred a shadow that the bundle then averages anyway).
 vec3 from_lights(vec3 z1, vec3 n, vec3 v, rb_material m, float pdf_bundle)
 {
     vec3 sum = vec3(0.0);
@@ -146,7 +149,7 @@ vec3 from_lights(vec3 z1, vec3 n, vec3 v, rb_material m, float pdf_bundle)
         float vis = 1.0, w = 1.0;
         if (first >= 0) {
             uint layer = uint(first) + (kind == RB_KIND_POINT ? rb_cube_face(-l) : 0u);
-            vis = shadow_visibility(layer, z1, n, cos_z);
+            vis = shadow_lookup(layer, z1, n, cos_z, false);
             // VPLs come from shadowed lights only (generate): weigh against them.
             vec4 c = blights[j].choice;
             float pdf_vpl = rb_bdpt_vpl_density((1.0 - emit_info.info.x) * c.x * c.z, cos_z,

@@ -4,11 +4,13 @@
 #ifndef RB_SHADOW_GLSL
 #define RB_SHADOW_GLSL
 
-// Fraction of 16 taps (a 4x4 grid spanning the PCF radius) that see the light. The lookup point
-// is pushed off the surface along the geometric normal by the filter's footprint (normal-offset
-// shadows), and the depth test gets a slope-scaled bias: together they keep grazing surfaces
-// from shadowing themselves.
-float shadow_visibility(uint layer, vec3 p, vec3 ng, float cos_theta)
+// Fraction of the taps that see the light: with pcf, 16 taps (a 4x4 grid spanning the PCF
+// radius); without, the one texel the point falls in (a hard shadow, a point light's true one).
+// The lookup point is pushed off the surface along the geometric normal by the filter's
+// footprint (normal-offset shadows), and the depth test gets a slope-scaled bias: together they
+// keep grazing surfaces from shadowing themselves. The one-texel test keeps the filter's offset
+// and bias: its points (bundle hits) lie off their surface by up to a bundle texel's depth.
+float shadow_lookup(uint layer, vec3 p, vec3 ng, float cos_theta, bool pcf)
 {
     rb_gpu_shadow_view v = views[layer];
     bool persp = uint(v.light.w) != RB_KIND_DIRECTIONAL;
@@ -26,6 +28,10 @@ float shadow_visibility(uint layer, vec3 p, vec3 ng, float cos_theta)
     float tan_theta = min(sqrt(max(1.0 - cos_theta * cos_theta, 0.0)) / max(cos_theta, 1e-3), 10.0);
     float footprint = v.axis.w * (persp ? dist : 1.0);
     float bias = g.shadow.x * max(dist, 1e-3) + footprint * (radius + 1.0) * tan_theta;
+    if (!pcf) {
+        ivec2 t = clamp(ivec2(floor(texel + 0.5)), ivec2(0), ivec2(int(size) - 1));
+        return dist - bias <= texelFetch(shadow_maps, ivec3(t, int(layer)), 0).r ? 1.0 : 0.0;
+    }
     float step = radius / 1.5;
     float lit = 0.0;
     for (int y = 0; y < 4; y++)
@@ -36,6 +42,12 @@ float shadow_visibility(uint layer, vec3 p, vec3 ng, float cos_theta)
             lit += dist - bias <= stored ? 1.0 : 0.0;
         }
     return lit / 16.0;
+}
+
+// The direct light's lookup: 16-tap PCF.
+float shadow_visibility(uint layer, vec3 p, vec3 ng, float cos_theta)
+{
+    return shadow_lookup(layer, p, ng, cos_theta, true);
 }
 
 #endif
