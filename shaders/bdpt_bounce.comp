@@ -17,6 +17,7 @@
 #include "brdf.glsl"
 #include "view.glsl"
 #include "bdpt_views.glsl"
+#include "bdpt_vpl.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -52,14 +53,8 @@ void main()
         // surface hides. What such a gap traps barely leaves it.
         if (cos0 > 0.0 && cos1 > 0.0 && sqrt(r2) * cos1 > 2.0 * vpl_lift(pc.scene.w)) {
             vec3 power = RB_PI * y0.power.rgb;
-            if (reflects) {
-                vec3 to_light = kind == RB_KIND_DIRECTIONAL
-                                    ? y0.from.xyz
-                                    : normalize(y0.from.xyz - y0.position.xyz);
-                rb_material m = rb_material_unpack(y0.material.xy);
-                power *= rb_brdf(y0.normal.xyz, w, to_light, m.c_diff, vec3(m.spec), 1.0,
-                                 m.roughness);
-            }
+            if (reflects)
+                power *= vpl_brdf(y0, w);
             o.from.w = float(emitter ? RB_BDPT_VPL_BOUNCE : RB_BDPT_VPL_SECOND);
             o.position = vec4(p.xyz, 1.0);
             o.normal = vec4(n, rb_bdpt_bounce_density(cos0, cos1, r2));

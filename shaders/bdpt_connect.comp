@@ -26,6 +26,7 @@
 #include "encode.glsl"
 #include "lights.glsl"
 #include "view.glsl"
+#include "bdpt_vpl.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -85,12 +86,6 @@ vec3 environment(vec3 dir)
     return env * g.env.x;
 }
 
-// A node's or VPL's BRDF: its diffuse colour and gray F0, F90 = 1 (rb_material_pack).
-vec3 surface_brdf(vec3 n, vec3 v, vec3 l, rb_material m)
-{
-    return rb_brdf(n, v, l, m.c_diff, vec3(m.spec), 1.0, m.roughness);
-}
-
 // Radiance VPL k sends from its surface towards p (normal n at p, facing the VPL), times the
 // cosine at p: f_z power G V, G = cos_z cos_p / r^2, clamped at the clamp when one is set; an
 // emitter's point sends its emission: power G V.
@@ -108,13 +103,9 @@ vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, out vec3 l, out flo
         geo = min(geo, pc.counts.w);
     if (vpl_visibility(k, p, ng) <= 0.0)
         return vec3(0.0);
-    uint kind = uint(z.from.w);
-    if (kind == RB_BDPT_VPL_EMITTER)
+    if (uint(z.from.w) == RB_BDPT_VPL_EMITTER)
         return z.power.rgb * geo;
-    vec3 to_light =
-        kind == RB_KIND_DIRECTIONAL ? z.from.xyz : normalize(z.from.xyz - z.position.xyz);
-    rb_material m = rb_material_unpack(z.material.xy);
-    return surface_brdf(z.normal.xyz, -l, to_light, m) * z.power.rgb * geo;
+    return vpl_brdf(z, -l) * z.power.rgb * geo;
 }
 
 // The light z1 reflects towards x1 (direction v) from the punctual lights, each weighted

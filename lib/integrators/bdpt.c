@@ -135,6 +135,13 @@ static void destroy(struct rb_integrator *it, void *state)
 /* Draw commands the shaders edit. */
 #define DRAWS (STORAGE | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT)
 
+/* The VPLs' generations: each VPL (1), with its bounce (2), with an emitter's bounce's bounce
+ * (3). The VPL buffers and maps hold that many times K_v. */
+static uint32_t vpl_generations(const struct rb_bdpt_frame *b)
+{
+    return b->has_chain ? 3u : b->has_bounce ? 2u : 1u;
+}
+
 /* Where sample i of K goes among the sequence's K points of a block: connect hands sample i to
  * sub-image i mod m (m = n^2), so the sub-images' samples are made consecutive runs of the
  * sequence, sub-image 0's first. A run of a (0, 2)-sequence is spread over the whole domain; the
@@ -250,7 +257,7 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
     b->has_bounce = b->vpl_count > 0;
     /* With emitters, the bounce of emitter VPL i's bounce is VPL 2 K_v + i. */
     b->has_chain = b->has_bounce && b->emitter_count > 0;
-    uint32_t all = b->has_chain ? 3 * kv : b->has_bounce ? 2 * kv : kv;
+    uint32_t all = kv * vpl_generations(b);
     if ((st = rb_frame_buffer(gpu, 8 * sizeof(uint32_t), STORAGE, false, "bdpt.bounds", &b->bounds,
                               err)) ||
         (st =
@@ -739,9 +746,7 @@ static void record_cache(struct rb_integrator *it, struct bdpt *d, VkCommandBuff
                                 .kind = RB_VIEW_KIND_PARABOLOID,
                                 .output = RB_VIEW_OUTPUT_DEPTH,
                                 .views = &b->vpl_views,
-                                .view_count = b->vpl_count * (b->has_chain    ? 3u
-                                                              : b->has_bounce ? 2u
-                                                                              : 1u),
+                                .view_count = b->vpl_count * vpl_generations(b),
                                 .targets = {&b->vpl_maps},
                                 .depth = &b->vpl_depth,
                                 .use_simplified = true,
