@@ -19,7 +19,13 @@ ifneq ($(V),1)
 Q := @
 endif
 
-PKGS := vulkan OpenImageIO OpenColorIO yaml-0.1 tinygltf libxxhash jansson
+# OIIO=0 builds without OpenImageIO (the portable build, make dist): EXR and PNG go through
+# OpenEXR and libpng in every build; only reading other formats and report thumbnails need it.
+OIIO ?= 1
+PKGS := vulkan OpenEXR libpng OpenColorIO yaml-0.1 tinygltf libxxhash jansson
+ifeq ($(OIIO),1)
+PKGS += OpenImageIO
+endif
 # Deferred (=), so a fresh machine gets them after scripts/install-deps.sh has run.
 PKG_CFLAGS = $(shell $(PKG_CONFIG) --cflags $(PKGS) 2>/dev/null)
 # Embree and meshoptimizer ship no pkg-config file in Debian 12.
@@ -43,13 +49,17 @@ FPFLAGS := -ffp-contract=off
 DEPFLAGS = -MMD -MP
 # DATADIR is not compiled in: the binary finds its data relative to itself (../share/raybundle),
 # so `make install` with another PREFIX installs the same build without rebuilding it.
-ALL_CPPFLAGS = -Ilib -I$(BUILD)/shaders -Ishaders/common -D_POSIX_C_SOURCE=200809L $(CPPFLAGS)
+ALL_CPPFLAGS = -Ilib -I$(BUILD)/shaders -Ishaders/common -D_POSIX_C_SOURCE=200809L \
+	-DRB_WITH_OIIO=$(OIIO) $(CPPFLAGS)
 ALL_CFLAGS = -std=c11 $(WARN) $(FPFLAGS) $(DEPFLAGS) $(PKG_CFLAGS) $(SANFLAGS) $(CFLAGS)
 ALL_CXXFLAGS = -std=c++17 $(CXXWARN) $(FPFLAGS) $(DEPFLAGS) $(PKG_CFLAGS) $(SANFLAGS) $(CXXFLAGS)
 ALL_LDFLAGS = $(SANFLAGS) $(LDFLAGS)
 
 LIB_C := $(sort $(wildcard lib/*/*.c))
 LIB_CXX := $(sort $(wildcard lib/*/*.cpp))
+ifneq ($(OIIO),1)
+LIB_CXX := $(filter-out lib/io/oiio_shim.cpp,$(LIB_CXX))
+endif
 CMD_C := $(sort $(wildcard cmd/*.c))
 LIB_OBJ := $(LIB_C:%.c=$(BUILD)/%.o) $(LIB_CXX:%.cpp=$(BUILD)/%.o)
 CMD_OBJ := $(CMD_C:%.c=$(BUILD)/%.o)
@@ -68,7 +78,8 @@ DEPS := $(LIB_OBJ:.o=.d) $(CMD_OBJ:.o=.d) $(UNIT_BIN:=.d) $(TOOL_BIN:=.d) \
 
 DEPS_STAMP := $(BUILD)/.deps-ok
 
-.PHONY: all test check check-farm bench demo install uninstall clean lint format deps fuzz update-golden
+.PHONY: all test check check-farm check-dist dist bench demo install uninstall clean lint format deps \
+	fuzz update-golden
 .SECONDARY: $(SPV_H)
 all: $(BUILD)/raybundle
 
@@ -205,6 +216,26 @@ update-golden: $(BUILD)/raybundle $(TOOL_BIN)
 
 demo: $(BUILD)/raybundle
 	$(Q)$(BUILD)/raybundle render jobs/demo.yaml --preview
+
+# The portable tarball: a build without OpenImageIO in its own directory, its libraries beside
+# it (none that a host's Vulkan driver loads too), found through an $$ORIGIN-relative RUNPATH.
+# VERSION is git describe's (a v* tag), else the source's version and the commit.
+DIST_BUILD ?= $(BUILD)-dist
+RB_VERSION_NUM := $(shell sed -n 's/^\#define RB_VERSION "\(.*\)"/\1/p' lib/core/core.h)
+DIST_VERSION ?= $(shell v=$$(git describe --tags --match 'v[0-9]*' --dirty 2>/dev/null); \
+	if [ -n "$$v" ]; then echo "$${v\#v}"; \
+	else echo "$(RB_VERSION_NUM)-g$$(git describe --always --dirty 2>/dev/null || echo unknown)"; fi)
+DIST_TARBALL = dist/raybundle-$(DIST_VERSION)-linux-x86_64.tar.xz
+
+dist: $(DEPS_STAMP)
+	$(Q)$(MAKE) --no-print-directory BUILD=$(DIST_BUILD) OIIO=0 $(DIST_BUILD)/raybundle
+	$(Q)scripts/dist.sh $(DIST_BUILD)/raybundle dist $(DIST_VERSION)
+
+# The tarball on another distribution (a cached Debian 13 chroot) and the GPU check end to end
+# on lavapipe. Needs root and Debian's mirrors; .ci/run runs it after make check.
+check-dist: dist $(BUILD)/raybundle
+	$(Q)tests/dist/check-dist.sh $(DIST_TARBALL) $(BUILD)/raybundle
+	$(Q)tests/gpu/selftest.sh $(DIST_TARBALL)
 
 install: $(BUILD)/raybundle
 	install -d "$(DESTDIR)$(BINDIR)" "$(DESTDIR)$(MANDIR)/man1" "$(DESTDIR)$(MANDIR)/man5" \

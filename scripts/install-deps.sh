@@ -1,6 +1,7 @@
 #!/bin/sh
 # Installs the Debian 12 packages raybundle needs to build, render and test, and nothing from
 # anywhere else. Fast when everything is present; the one list of packages is here.
+# patchelf, debootstrap and xz-utils make and test the portable tarball (make dist, check-dist).
 # chromium is for the tests alone: t0420 loads raybundle report's page in it, headless.
 # --farm: also the single-node Slurm cluster `make check-farm` starts (slurm-wlm, munge).
 set -eu
@@ -9,6 +10,7 @@ PACKAGES="
 make gcc g++ pkg-config
 libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
 glslang-tools spirv-tools
+libopenexr-dev libpng-dev
 libopenimageio-dev openimageio-tools
 libopencolorio-dev opencolorio-tools
 libtinygltf-dev nlohmann-json3-dev
@@ -16,6 +18,7 @@ libembree-dev libmeshoptimizer-dev
 libyaml-dev libxxhash-dev libjansson-dev
 libcmocka-dev
 mandoc man-db time clang-format
+patchelf debootstrap xz-utils
 chromium
 "
 if [ "${1:-}" = --farm ]; then

@@ -1,11 +1,26 @@
 /* Files in and out, the C side: frame paths, sidecar names, atomic writes, the EXR channel and
  * metadata policy, the preview's quantization, and the timing sidecar's JSON. The libraries
- * themselves sit behind oiio_shim.cpp and ocio_shim.cpp, which decide nothing. */
+ * themselves sit behind exr_shim.cpp (OpenEXR), png_codec.c (libpng), ocio_shim.cpp and
+ * oiio_shim.cpp, which decide nothing.
+ *
+ * What raybundle writes, and the EXRs and PNGs it reads back, go through OpenEXR and libpng
+ * alone, so every build writes the same bytes. OpenImageIO serves what only it does: reading
+ * other formats (a reference image from elsewhere) and resizing report thumbnails. A build
+ * without it (RB_WITH_OIIO=0, the portable one: Debian's OpenImageIO pulls in hundreds of
+ * megabytes of plugins) says so when asked for those. */
 #define _XOPEN_SOURCE 700 /* realpath */
 #include "io/io.h"
 
+#include "io/exr_shim.h"
 #include "io/ocio_shim.h"
+#include "io/png_codec.h"
+
+#ifndef RB_WITH_OIIO
+#define RB_WITH_OIIO 1
+#endif
+#if RB_WITH_OIIO
 #include "io/oiio_shim.h"
+#endif
 
 #include <errno.h>
 #include <glob.h>
@@ -275,18 +290,17 @@ out:
     return st;
 }
 
-/* Writes an image through the OIIO shim to a temporary name with the file's real extension
- * (OIIO picks writers by name), fsyncs it, and renames it over path. */
-static enum rb_status write_image_atomic(const char *path, const char *ext,
-                                         struct rb_oiio_write_desc *desc, struct rb_err *err)
+/* Writes an EXR through the shim to a temporary name, fsyncs it, and renames it over path. */
+static enum rb_status write_exr_atomic(const char *path, struct rb_exr_write_desc *desc,
+                                       struct rb_err *err)
 {
     enum rb_status st = RB_OK;
     char msg[400];
-    char *tmp = temp_path(path, ext);
+    char *tmp = temp_path(path, ".exr");
     if (!tmp)
         return rb_errf(err, RB_E_NOMEM, "cannot write '%s': out of memory", path);
     desc->path = tmp;
-    if (rb_oiio_write(desc, msg, sizeof(msg)) != RB_OIIO_OK) {
+    if (rb_exr_write(desc, msg, sizeof(msg)) != RB_EXR_OK) {
         unlink(tmp);
         st = rb_errf(err, RB_E_EXTERNAL, "cannot write '%s': %s", path, msg);
         goto out;
@@ -329,7 +343,7 @@ enum rb_status rb_io_exr_write(const char *path, uint32_t width_px, uint32_t hei
     char **names = NULL;
     bool *is_half = NULL;
     float *pixels = NULL;
-    struct rb_oiio_attr *oattrs = NULL;
+    struct rb_exr_attr *oattrs = NULL;
     size_t *order = NULL;
     uint32_t total = 0;
 
@@ -366,7 +380,7 @@ enum rb_status rb_io_exr_write(const char *path, uint32_t width_px, uint32_t hei
     is_half = calloc(total, sizeof(*is_half));
     pixels = malloc(pixel_bytes);
     order = calloc(layer_count, sizeof(*order));
-    oattrs = calloc(attr_count + 5, sizeof(*oattrs));
+    oattrs = calloc(attr_count + 2, sizeof(*oattrs));
     if (!names || !is_half || !pixels || !order || !oattrs) {
         st = rb_errf(err, RB_E_NOMEM, "exr '%s': out of memory", path);
         goto out;
@@ -409,30 +423,28 @@ enum rb_status rb_io_exr_write(const char *path, uint32_t width_px, uint32_t hei
         }
     }
 
-    /* Our metadata first; a caller's attribute of the same name replaces it. Nothing here
-     * depends on the time or the host, so equal pixels give equal bytes. */
+    /* Our metadata, unless the caller gives an attribute of the same name. Nothing here
+     * depends on the time or the host, so equal pixels give equal bytes (test_io checks the
+     * header has no capDate). */
     size_t na = 0;
-    oattrs[na++] =
-        (struct rb_oiio_attr){.name = "compression", .type = RB_OIIO_ATTR_STRING, .s = "zip"};
-    oattrs[na++] = (struct rb_oiio_attr){
-        .name = "oiio:ColorSpace", .type = RB_OIIO_ATTR_STRING, .s = "Linear"};
-    oattrs[na++] = (struct rb_oiio_attr){.name = "chromaticities",
-                                         .type = RB_OIIO_ATTR_FLOATS,
-                                         .fv = rec709_chromaticities,
-                                         .fv_count = 8};
-    oattrs[na++] = (struct rb_oiio_attr){
-        .name = "software", .type = RB_OIIO_ATTR_STRING, .s = "raybundle " RB_VERSION};
-    /* OIIO stamps the current time as EXR "capDate" unless the spec has a DateTime. An int
-     * DateTime counts as present, yet OIIO's EXR writer drops it (capDate must be a string),
-     * so the header gets no date at all. test_io checks the header for capDate. */
-    oattrs[na++] = (struct rb_oiio_attr){.name = "DateTime", .type = RB_OIIO_ATTR_INT, .i = 0};
+    const struct rb_exr_attr ours[2] = {
+        {.name = "chromaticities", .type = RB_EXR_ATTR_CHROMATICITIES, .fv = rec709_chromaticities},
+        {.name = "software", .type = RB_EXR_ATTR_STRING, .s = "raybundle " RB_VERSION},
+    };
+    for (size_t k = 0; k < 2; k++) {
+        bool given = false;
+        for (size_t i = 0; i < attr_count; i++)
+            given |= attrs[i].name && !strcmp(attrs[i].name, ours[k].name);
+        if (!given)
+            oattrs[na++] = ours[k];
+    }
     for (size_t i = 0; i < attr_count; i++) {
         const struct rb_io_attr *a = &attrs[i];
         if (!a->name || !*a->name) {
             st = rb_errf(err, RB_E_INVALID, "exr '%s': attribute %zu has no name", path, i);
             goto out;
         }
-        struct rb_oiio_attr *o = &oattrs[na++];
+        struct rb_exr_attr *o = &oattrs[na++];
         o->name = a->name;
         switch (a->type) {
         case RB_IO_ATTR_STRING:
@@ -441,21 +453,20 @@ enum rb_status rb_io_exr_write(const char *path, uint32_t width_px, uint32_t hei
                              a->name);
                 goto out;
             }
-            o->type = RB_OIIO_ATTR_STRING;
+            o->type = RB_EXR_ATTR_STRING;
             o->s = a->s;
             break;
         case RB_IO_ATTR_INT:
-            o->type = RB_OIIO_ATTR_INT;
+            o->type = RB_EXR_ATTR_INT;
             o->i = a->i;
             break;
         case RB_IO_ATTR_FLOAT:
-            o->type = RB_OIIO_ATTR_FLOAT;
+            o->type = RB_EXR_ATTR_FLOAT;
             o->f = a->f;
             break;
         case RB_IO_ATTR_M44:
-            o->type = RB_OIIO_ATTR_M44;
+            o->type = RB_EXR_ATTR_M44;
             o->fv = a->m;
-            o->fv_count = 16;
             break;
         default:
             st = rb_errf(err, RB_E_INVALID, "exr '%s': attribute '%s' has unknown type %d", path,
@@ -464,8 +475,7 @@ enum rb_status rb_io_exr_write(const char *path, uint32_t width_px, uint32_t hei
         }
     }
 
-    struct rb_oiio_write_desc desc = {
-        .format_name = "openexr",
+    struct rb_exr_write_desc desc = {
         .width_px = width_px,
         .height_px = height_px,
         .channel_count = total,
@@ -475,7 +485,7 @@ enum rb_status rb_io_exr_write(const char *path, uint32_t width_px, uint32_t hei
         .attrs = oattrs,
         .attr_count = na,
     };
-    st = write_image_atomic(path, ".exr", &desc, err);
+    st = write_exr_atomic(path, &desc, err);
 out:
     for (uint32_t i = 0; names && i < total; i++)
         free(names[i]);
@@ -489,52 +499,115 @@ out:
 
 /* ---- reading ---------------------------------------------------------------------------- */
 
-enum rb_status rb_io_image_read(const char *path, struct rb_io_image *out, struct rb_err *err)
+/* Allocates img's pixels and channel names for width x height x channels; false when too large
+ * or out of memory (err says which, naming path). */
+static enum rb_status image_alloc(const char *path, struct rb_io_image *img, uint32_t width_px,
+                                  uint32_t height_px, uint32_t channel_count, struct rb_err *err)
 {
+    size_t bytes = mul3((size_t)width_px * height_px, channel_count, sizeof(float));
+    if (!bytes)
+        return rb_errf(err, RB_E_INVALID, "cannot read '%s': image too large", path);
+    img->width_px = width_px;
+    img->height_px = height_px;
+    img->channel_count = channel_count;
+    img->pixels = malloc(bytes);
+    img->channel_names = calloc(channel_count, sizeof(*img->channel_names));
+    if (!img->pixels || !img->channel_names)
+        return rb_errf(err, RB_E_NOMEM, "cannot read '%s': out of memory", path);
+    return RB_OK;
+}
+
+static enum rb_status name_channel(const char *path, struct rb_io_image *img, uint32_t c,
+                                   const char *name, struct rb_err *err)
+{
+    if (!(img->channel_names[c] = rb_strdup(name)))
+        return rb_errf(err, RB_E_NOMEM, "cannot read '%s': out of memory", path);
+    return RB_OK;
+}
+
+static enum rb_status read_exr(const char *path, struct rb_io_image *img, struct rb_err *err)
+{
+    struct rb_exr_input *in = NULL;
+    uint32_t w, h, n;
+    char msg[400];
+    if (rb_exr_open(path, &in, &w, &h, &n, msg, sizeof(msg)) != RB_EXR_OK)
+        return rb_errf(err, RB_E_EXTERNAL, "cannot read '%s': %s", path, msg);
+    enum rb_status st = image_alloc(path, img, w, h, n, err);
+    for (uint32_t c = 0; !st && c < n; c++)
+        st = name_channel(path, img, c, rb_exr_channel_name(in, c), err);
+    if (!st && rb_exr_read(in, img->pixels, msg, sizeof(msg)) != RB_EXR_OK)
+        st = rb_errf(err, RB_E_EXTERNAL, "cannot read '%s': %s", path, msg);
+    rb_exr_close(in);
+    return st;
+}
+
+static enum rb_status read_png(const char *path, struct rb_io_image *img, struct rb_err *err)
+{
+    uint32_t w, h, n;
+    float *pixels = NULL;
+    char msg[400];
+    if (!rb_png_decode(path, &w, &h, &n, &pixels, msg, sizeof(msg)))
+        return rb_errf(err, RB_E_EXTERNAL, "cannot read '%s': %s", path, msg);
+    img->width_px = w;
+    img->height_px = h;
+    img->channel_count = n;
+    img->pixels = pixels;
+    if (!(img->channel_names = calloc(n, sizeof(*img->channel_names))))
+        return rb_errf(err, RB_E_NOMEM, "cannot read '%s': out of memory", path);
     enum rb_status st = RB_OK;
+    for (uint32_t c = 0; !st && c < n; c++)
+        st = name_channel(path, img, c, rb_png_channel_name(n, c), err);
+    return st;
+}
+
+#if RB_WITH_OIIO
+static enum rb_status read_oiio(const char *path, struct rb_io_image *img, struct rb_err *err)
+{
     struct rb_oiio_input *in = NULL;
     struct rb_oiio_info info = {0};
-    struct rb_io_image img = {0};
     char msg[400];
+    if (rb_oiio_input_open(path, &in, &info, msg, sizeof(msg)) != RB_OIIO_OK)
+        return rb_errf(err, RB_E_EXTERNAL, "cannot read '%s': %s", path, msg);
+    enum rb_status st =
+        image_alloc(path, img, info.width_px, info.height_px, info.channel_count, err);
+    for (uint32_t c = 0; !st && c < info.channel_count; c++)
+        st = name_channel(path, img, c, rb_oiio_input_channel_name(in, c), err);
+    if (!st && rb_oiio_input_read(in, img->pixels, msg, sizeof(msg)) != RB_OIIO_OK)
+        st = rb_errf(err, RB_E_EXTERNAL, "cannot read '%s': %s", path, msg);
+    rb_oiio_input_close(in);
+    return st;
+}
+#endif
+
+enum rb_status rb_io_image_read(const char *path, struct rb_io_image *out, struct rb_err *err)
+{
+    struct rb_io_image img = {0};
     struct stat sb;
 
     if (!path || !*path || !out)
         return rb_errf(err, RB_E_INVALID, "read image: no path");
     if (stat(path, &sb) != 0)
         return rb_errf(err, RB_E_IO, "cannot read '%s': %s", path, strerror(errno));
-    if (rb_oiio_input_open(path, &in, &info, msg, sizeof(msg)) != RB_OIIO_OK)
-        return rb_errf(err, RB_E_EXTERNAL, "cannot read '%s': %s", path, msg);
-
-    size_t bytes = mul3((size_t)info.width_px * info.height_px, info.channel_count, sizeof(float));
-    if (!bytes) {
-        st = rb_errf(err, RB_E_INVALID, "cannot read '%s': image too large", path);
-        goto out;
+    enum rb_status st;
+    if (rb_exr_is_exr(path))
+        st = read_exr(path, &img, err);
+    else if (rb_png_is_png(path))
+        st = read_png(path, &img, err);
+    else
+#if RB_WITH_OIIO
+        st = read_oiio(path, &img, err);
+#else
+        st = rb_errf(err, RB_E_UNSUPPORTED,
+                     "cannot read '%s': it is neither OpenEXR nor PNG, and this build of "
+                     "raybundle reads other formats only through OpenImageIO, which it was "
+                     "built without",
+                     path);
+#endif
+    if (!st) {
+        *out = img;
+        img = (struct rb_io_image){0};
     }
-    img.width_px = info.width_px;
-    img.height_px = info.height_px;
-    img.channel_count = info.channel_count;
-    img.pixels = malloc(bytes);
-    img.channel_names = calloc(info.channel_count, sizeof(*img.channel_names));
-    if (!img.pixels || !img.channel_names) {
-        st = rb_errf(err, RB_E_NOMEM, "cannot read '%s': out of memory", path);
-        goto out;
-    }
-    for (uint32_t c = 0; c < info.channel_count; c++) {
-        img.channel_names[c] = rb_strdup(rb_oiio_input_channel_name(in, c));
-        if (!img.channel_names[c]) {
-            st = rb_errf(err, RB_E_NOMEM, "cannot read '%s': out of memory", path);
-            goto out;
-        }
-    }
-    if (rb_oiio_input_read(in, img.pixels, msg, sizeof(msg)) != RB_OIIO_OK) {
-        st = rb_errf(err, RB_E_EXTERNAL, "cannot read '%s': %s", path, msg);
-        goto out;
-    }
-    *out = img;
-    img = (struct rb_io_image){0};
-out:
     rb_io_image_release(&img);
-    rb_oiio_input_close(in);
     return st;
 }
 
@@ -561,16 +634,29 @@ int rb_io_image_channel(const struct rb_io_image *img, const char *name)
 
 bool rb_io_image_attr(const char *path, const char *name, char *out, size_t size)
 {
-    struct rb_oiio_input *in = NULL;
-    struct rb_oiio_info info;
     char msg[400];
+    uint32_t w, h, n;
     if (!path || !name)
         return false;
+    if (rb_exr_is_exr(path)) {
+        struct rb_exr_input *in = NULL;
+        if (rb_exr_open(path, &in, &w, &h, &n, msg, sizeof(msg)) != RB_EXR_OK)
+            return false;
+        bool found = rb_exr_attr_text(in, name, out, size);
+        rb_exr_close(in);
+        return found;
+    }
+#if RB_WITH_OIIO
+    struct rb_oiio_input *in = NULL;
+    struct rb_oiio_info info;
     if (rb_oiio_input_open(path, &in, &info, msg, sizeof(msg)) != RB_OIIO_OK)
         return false;
     bool found = rb_oiio_input_attr(in, name, out, size);
     rb_oiio_input_close(in);
     return found;
+#else
+    return false;
+#endif
 }
 
 bool rb_io_image_is_complete(const char *path)
@@ -594,9 +680,16 @@ static bool file_exists(const char *path)
 
 const char *rb_io_library_versions(void)
 {
-    static char buf[128];
-    snprintf(buf, sizeof(buf), "OpenImageIO %s, OpenColorIO %s", rb_oiio_version(),
-             rb_ocio_version());
+    static char buf[160];
+#if RB_WITH_OIIO
+    snprintf(buf, sizeof(buf), "OpenImageIO %s, OpenEXR %s, libpng %s, OpenColorIO %s",
+             rb_oiio_version(), rb_exr_version(), rb_png_version(), rb_ocio_version());
+#else
+    snprintf(buf, sizeof(buf),
+             "OpenImageIO (not in this build), OpenEXR %s, libpng %s, "
+             "OpenColorIO %s",
+             rb_exr_version(), rb_png_version(), rb_ocio_version());
+#endif
     return buf;
 }
 
@@ -705,29 +798,6 @@ out:
     return st;
 }
 
-/* An 8-bit RGBA PNG of display bytes. */
-static struct rb_oiio_write_desc png_desc(uint32_t width_px, uint32_t height_px,
-                                          const uint8_t *bytes)
-{
-    static const char *const names[4] = {"R", "G", "B", "A"};
-    /* The bytes are final: OIIO must not (de)associate alpha on the way out. */
-    static const struct rb_oiio_attr attrs[] = {
-        {.name = "oiio:UnassociatedAlpha", .type = RB_OIIO_ATTR_INT, .i = 1},
-        {.name = "Software", .type = RB_OIIO_ATTR_STRING, .s = "raybundle " RB_VERSION},
-    };
-    return (struct rb_oiio_write_desc){
-        .format_name = "png",
-        .width_px = width_px,
-        .height_px = height_px,
-        .channel_count = 4,
-        .channel_names = names,
-        .is_uint8 = true,
-        .pixels = bytes,
-        .attrs = attrs,
-        .attr_count = sizeof(attrs) / sizeof(attrs[0]),
-    };
-}
-
 enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t height_px,
                                    const float *rgba, const struct rb_io_color_desc *desc,
                                    struct rb_err *err)
@@ -740,38 +810,31 @@ enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t
     enum rb_status st = display_bytes(what, width_px, height_px, rgba, desc, false, &bytes, err);
     if (st)
         return st;
-    struct rb_oiio_write_desc wd = png_desc(width_px, height_px, bytes);
-    st = write_image_atomic(path, ".png", &wd, err);
+    void *png = NULL;
+    size_t png_size = 0;
+    char msg[300];
+    if (!rb_png_encode(bytes, width_px, height_px, "raybundle " RB_VERSION, &png, &png_size, msg,
+                       sizeof(msg)))
+        st = rb_errf(err, RB_E_EXTERNAL, "cannot write '%s': %s", path, msg);
+    else
+        st = rb_io_write_atomic(path, png, png_size, err);
+    free(png);
     free(bytes);
     return st;
-}
-
-/* The encoded PNG, kept by the shim's sink. */
-struct encoded {
-    void *bytes;
-    size_t size;
-};
-
-static bool keep_encoded(const void *bytes, size_t size, void *user)
-{
-    struct encoded *e = user;
-    if (!(e->bytes = malloc(size ? size : 1)))
-        return false;
-    memcpy(e->bytes, bytes, size);
-    e->size = size;
-    return true;
 }
 
 enum rb_status rb_io_thumbnail_data_uri(uint32_t width_px, uint32_t height_px, const float *rgba,
                                         const struct rb_io_thumbnail_desc *desc, char **out,
                                         struct rb_err *err)
 {
+#if RB_WITH_OIIO
     static const char prefix[] = "data:image/png;base64,";
     struct rb_io_thumbnail_desc d = desc ? *desc : (struct rb_io_thumbnail_desc){0};
     uint32_t w = d.width_px ? d.width_px : width_px, h = d.height_px ? d.height_px : height_px;
     float *small = NULL;
     uint8_t *bytes = NULL;
-    struct encoded png = {0};
+    void *png = NULL;
+    size_t png_size = 0;
     char *uri = NULL, msg[400];
     enum rb_status st = RB_OK;
 
@@ -793,22 +856,17 @@ enum rb_status rb_io_thumbnail_data_uri(uint32_t width_px, uint32_t height_px, c
     if ((st = display_bytes("thumbnail", w, h, small ? small : rgba, d.color, d.is_data, &bytes,
                             err)))
         goto out;
-    struct rb_oiio_write_desc wd = png_desc(w, h, bytes);
-    wd.path = "thumbnail.png";
-    wd.sink = keep_encoded;
-    wd.sink_user = &png;
-    if (rb_oiio_write(&wd, msg, sizeof(msg))) {
+    if (!rb_png_encode(bytes, w, h, "raybundle " RB_VERSION, &png, &png_size, msg, sizeof(msg))) {
         st = rb_errf(err, RB_E_EXTERNAL, "thumbnail: cannot encode a PNG: %s", msg);
         goto out;
     }
-    size_t len = 4 * ((png.size + 2) / 3) + 1;
+    size_t len = 4 * ((png_size + 2) / 3) + 1;
     if (!(uri = malloc(sizeof(prefix) - 1 + len))) {
         st = rb_errf(err, RB_E_NOMEM, "thumbnail: out of memory");
         goto out;
     }
     memcpy(uri, prefix, sizeof(prefix) - 1);
-    if (rb_oiio_base64_encode(png.bytes, png.size, uri + sizeof(prefix) - 1, len, msg,
-                              sizeof(msg))) {
+    if (rb_oiio_base64_encode(png, png_size, uri + sizeof(prefix) - 1, len, msg, sizeof(msg))) {
         st = rb_errf(err, RB_E_EXTERNAL, "thumbnail: %s", msg);
         goto out;
     }
@@ -816,10 +874,20 @@ enum rb_status rb_io_thumbnail_data_uri(uint32_t width_px, uint32_t height_px, c
     uri = NULL;
 out:
     free(uri);
-    free(png.bytes);
+    free(png);
     free(bytes);
     free(small);
     return st;
+#else
+    (void)width_px;
+    (void)height_px;
+    (void)rgba;
+    (void)desc;
+    (void)out;
+    return rb_errf(err, RB_E_UNSUPPORTED,
+                   "thumbnail: this build of raybundle has no OpenImageIO, which resizes and "
+                   "encodes thumbnails");
+#endif
 }
 
 /* ---- timing sidecar ------------------------------------------------------------------- */

@@ -1,9 +1,9 @@
-// OpenImageIO behind a C interface (oiio_shim.h). Thin: every function is extern "C" and
-// noexcept, turns exceptions and OIIO's geterror() into a message, and decides nothing that
-// io.c could decide instead.
+// OpenImageIO behind a C interface (oiio_shim.h): what only it does here (reading formats other
+// than EXR and PNG, resizing thumbnails). Compiled only where RB_WITH_OIIO is 1. Thin: every
+// function is extern "C" and noexcept, turns exceptions and OIIO's geterror() into a message, and
+// decides nothing that io.c could decide instead.
 #include "io/oiio_shim.h"
 
-#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
@@ -62,78 +62,6 @@ struct rb_oiio_input {
 extern "C" const char *rb_oiio_version(void) noexcept
 {
     return OIIO_VERSION_STRING;
-}
-
-extern "C" int rb_oiio_write(const struct rb_oiio_write_desc *d, char *msg,
-                             size_t msg_size) noexcept
-{
-    try {
-        quiet_debug();
-        auto out = OIIO::ImageOutput::create(d->format_name);
-        if (!out)
-            return fail(msg, msg_size, OIIO::geterror());
-
-        const OIIO::TypeDesc pixel_type =
-            d->is_uint8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT;
-        OIIO::ImageSpec spec(int(d->width_px), int(d->height_px), int(d->channel_count),
-                             pixel_type);
-        spec.channelnames.clear();
-        spec.alpha_channel = -1;
-        spec.z_channel = -1;
-        bool any_half = false;
-        for (uint32_t c = 0; c < d->channel_count; c++) {
-            spec.channelnames.emplace_back(d->channel_names[c]);
-            if (!std::strcmp(d->channel_names[c], "A"))
-                spec.alpha_channel = int(c);
-            if (d->channel_is_half && d->channel_is_half[c])
-                any_half = true;
-        }
-        if (any_half) {
-            spec.channelformats.clear();
-            for (uint32_t c = 0; c < d->channel_count; c++)
-                spec.channelformats.push_back(d->channel_is_half[c] ? OIIO::TypeDesc::HALF
-                                                                    : OIIO::TypeDesc::FLOAT);
-        }
-
-        for (size_t k = 0; k < d->attr_count; k++) {
-            const struct rb_oiio_attr *a = &d->attrs[k];
-            switch (a->type) {
-            case RB_OIIO_ATTR_STRING: spec.attribute(a->name, a->s ? a->s : ""); break;
-            case RB_OIIO_ATTR_INT: spec.attribute(a->name, a->i); break;
-            case RB_OIIO_ATTR_FLOAT: spec.attribute(a->name, a->f); break;
-            case RB_OIIO_ATTR_M44: spec.attribute(a->name, OIIO::TypeMatrix44, a->fv); break;
-            case RB_OIIO_ATTR_FLOATS:
-                spec.attribute(a->name, OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, int(a->fv_count)),
-                               a->fv);
-                break;
-            }
-        }
-
-        OIIO::Filesystem::IOVecOutput memory;
-        if (d->sink) {
-            if (!out->supports("ioproxy"))
-                return fail(msg, msg_size,
-                            std::string("format '") + d->format_name +
-                                "' cannot be written to memory");
-            out->set_ioproxy(&memory);
-        }
-        if (!out->open(d->path, spec))
-            return fail(msg, msg_size, out->geterror());
-        if (!out->write_image(pixel_type, d->pixels)) {
-            std::string e = out->geterror();
-            out->close();
-            return fail(msg, msg_size, e);
-        }
-        if (!out->close())
-            return fail(msg, msg_size, out->geterror());
-        if (d->sink && !d->sink(memory.buffer().data(), memory.buffer().size(), d->sink_user))
-            return fail(msg, msg_size, "out of memory for the encoded image");
-        return RB_OIIO_OK;
-    } catch (const std::exception &e) {
-        return fail(msg, msg_size, e.what());
-    } catch (...) {
-        return fail_unknown(msg, msg_size);
-    }
 }
 
 extern "C" int rb_oiio_resize(const float *src, uint32_t width_px, uint32_t height_px,

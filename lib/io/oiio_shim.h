@@ -1,6 +1,6 @@
-/* The C face of OpenImageIO: write one image part with given channels and attributes, open an
- * image and read it as float. No policy lives here (channel order, compression, metadata and
- * temporary names are io.c's); only plain structs and sizes cross. Private to lib/io. */
+/* The C face of OpenImageIO, for what only it does here: open an image of any format it reads
+ * and read it as float, resize, base64 (EXR and PNG go through exr_shim.h and png_codec.h). No
+ * policy lives here; only plain structs and sizes cross. Private to lib/io. */
 #ifndef RB_IO_OIIO_SHIM_H
 #define RB_IO_OIIO_SHIM_H
 
@@ -25,49 +25,8 @@ extern "C" {
 #define RB_OIIO_OK 0
 #define RB_OIIO_FAIL 1
 
-enum rb_oiio_attr_type {
-    RB_OIIO_ATTR_STRING = 1,
-    RB_OIIO_ATTR_INT,
-    RB_OIIO_ATTR_FLOAT,
-    RB_OIIO_ATTR_M44,   /* 16 floats, row-major (Imath M44f) */
-    RB_OIIO_ATTR_FLOATS /* fv_count floats, e.g. the 8 of EXR "chromaticities" */
-};
-
-struct rb_oiio_attr {
-    const char *name;
-    enum rb_oiio_attr_type type;
-    const char *s;
-    int i;
-    float f;
-    const float *fv; /* M44: 16 floats; FLOATS: fv_count floats */
-    uint32_t fv_count;
-};
-
-/* Receives an image encoded in memory (rb_oiio_write with a sink): size bytes, valid during the
- * call. Returns false when it cannot keep them (out of memory). */
-typedef bool (*rb_oiio_sink_fn)(const void *bytes, size_t size, void *user);
-
-struct rb_oiio_write_desc {
-    const char *path;        /* file to create (a temporary name; io.c renames it); with a sink,
-                              * only the name the format and messages see */
-    const char *format_name; /* OIIO plugin: "openexr", "png" */
-    uint32_t width_px, height_px, channel_count;
-    const char *const *channel_names; /* channel_count names, in file order */
-    const bool *channel_is_half;      /* per channel, EXR only; NULL: all full float */
-    bool is_uint8;                    /* pixels are uint8_t (PNG); else float */
-    const void *pixels;               /* interleaved, rows top to bottom */
-    const struct rb_oiio_attr *attrs;
-    size_t attr_count;
-    rb_oiio_sink_fn sink; /* NULL: write the file; else encode in memory and hand it to sink */
-    void *sink_user;
-};
-
-/* Writes one image (one part, scanlines) exactly as described. */
 /* OpenImageIO's version, e.g. "2.4.7". */
 const char *rb_oiio_version(void) RB_SHIM_NOEXCEPT;
-
-int rb_oiio_write(const struct rb_oiio_write_desc *desc, char *msg,
-                  size_t msg_size) RB_SHIM_NOEXCEPT;
 
 /* Resizes src (width*height*channel_count floats, interleaved) into dst, which the caller
  * allocates (dst_width*dst_height*channel_count floats), with ImageBufAlgo::resize's default
