@@ -235,7 +235,7 @@ dist: $(DEPS_STAMP)
 # on lavapipe. Needs root and Debian's mirrors; .ci/run runs it after make check.
 check-dist: dist $(BUILD)/raybundle
 	$(Q)tests/dist/check-dist.sh $(DIST_TARBALL) $(BUILD)/raybundle
-	$(Q)tests/gpu/selftest.sh $(DIST_TARBALL)
+	$(Q)tests/gpu/selftest.sh --tarball $(DIST_TARBALL)
 
 install: $(BUILD)/raybundle
 	install -d "$(DESTDIR)$(BINDIR)" "$(DESTDIR)$(MANDIR)/man1" "$(DESTDIR)$(MANDIR)/man5" \

@@ -18,7 +18,7 @@ libembree-dev libmeshoptimizer-dev
 libyaml-dev libxxhash-dev libjansson-dev
 libcmocka-dev
 mandoc man-db time clang-format
-patchelf debootstrap xz-utils
+patchelf debootstrap xz-utils python3 libglvnd0 libx11-6 libxext6
 chromium
 "
 if [ "${1:-}" = --farm ]; then

@@ -8,6 +8,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* What the loader's VK_ERROR_INCOMPATIBLE_DRIVER means to a user: it found no driver at all, or
+ * none of Vulkan 1.3. */
+#define NO_DRIVER_HINT                                                                          \
+    "no Vulkan 1.3 driver found (VK_ERROR_INCOMPATIBLE_DRIVER): install one, e.g. Mesa's "     \
+    "lavapipe (Debian, Ubuntu: mesa-vulkan-drivers) or your GPU vendor's driver"
+
 #define VALIDATION_LAYER "VK_LAYER_KHRONOS_validation"
 
 /* What a device must have; anything missing is named in the error. */
@@ -312,8 +318,7 @@ enum rb_status rb_gpu_create(const struct rb_gpu_desc *desc, struct rb_gpu **out
     if (vr < 0) {
         st = rb_gpu_fail(err, vr, "vkCreateInstance", NULL);
         if (vr == VK_ERROR_INCOMPATIBLE_DRIVER)
-            st = rb_errf(err, RB_E_NODEVICE, "no Vulkan 1.3 driver found (%s)",
-                         rb_gpu_result_name(vr));
+            st = rb_errf(err, RB_E_NODEVICE, "%s", NO_DRIVER_HINT);
         goto fail;
     }
     if (gpu->has_debug_utils) {
@@ -529,6 +534,8 @@ enum rb_status rb_gpu_print_devices(FILE *f, struct rb_err *err)
 {
     VkInstance inst = VK_NULL_HANDLE;
     VkResult vr = create_instance(false, false, &inst);
+    if (vr == VK_ERROR_INCOMPATIBLE_DRIVER)
+        return rb_errf(err, RB_E_NODEVICE, "%s", NO_DRIVER_HINT);
     if (vr < 0)
         return rb_errf(err, RB_E_NODEVICE, "cannot create a Vulkan instance: %s",
                        rb_gpu_result_name(vr));
