@@ -10,8 +10,8 @@
 
 /* What the loader's VK_ERROR_INCOMPATIBLE_DRIVER means to a user: it found no driver at all, or
  * none of Vulkan 1.3. */
-#define NO_DRIVER_HINT                                                                          \
-    "no Vulkan 1.3 driver found (VK_ERROR_INCOMPATIBLE_DRIVER): install one, e.g. Mesa's "     \
+#define NO_DRIVER_HINT                                                                             \
+    "no Vulkan 1.3 driver found (VK_ERROR_INCOMPATIBLE_DRIVER): install one, e.g. Mesa's "         \
     "lavapipe (Debian, Ubuntu: mesa-vulkan-drivers) or your GPU vendor's driver"
 
 #define VALIDATION_LAYER "VK_LAYER_KHRONOS_validation"
@@ -354,6 +354,15 @@ enum rb_status rb_gpu_create(const struct rb_gpu_desc *desc, struct rb_gpu **out
     rb_strlcpy(gpu->device_name, gpu->props.deviceName, sizeof(gpu->device_name));
     describe_driver(gpu->phys, gpu->driver, sizeof(gpu->driver));
     gpu->is_lavapipe = is_lavapipe(&gpu->props);
+    const VkMemoryPropertyFlags unified = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT |
+                                          VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT |
+                                          VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
+    for (uint32_t i = 0; i < gpu->mem_props.memoryTypeCount; i++)
+        if ((gpu->mem_props.memoryTypes[i].propertyFlags & unified) == unified)
+            gpu->is_unified_memory = true;
+    const char *staged = getenv("RB_GPU_STAGED_READBACK");
+    if (staged && !strcmp(staged, "1"))
+        gpu->is_unified_memory = false;
     gpu->timestamp_period_ns = gpu->props.limits.timestampPeriod;
 
     uint32_t qn = 0;

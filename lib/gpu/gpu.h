@@ -30,6 +30,12 @@ struct rb_gpu {
     char device_name[VK_MAX_PHYSICAL_DEVICE_NAME_SIZE];
     char driver[256]; /* driver name and info, e.g. "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)" */
     bool is_lavapipe;
+    /* Whether the GPU writes host-cached memory at its own memory's speed (a CPU device, an
+     * integrated GPU: one memory type is device-local, host-visible and host-cached). Elsewhere a
+     * shader writing host-visible memory writes across the bus, a few GB/s: a frame's readback
+     * is written to device memory and copied (rb_frame's readback_device). RB_GPU_STAGED_READBACK=1
+     * takes the copy anyway, so that lavapipe tests that path. */
+    bool is_unified_memory;
     bool has_debug_utils;
     bool validate;
     unsigned validation_messages; /* warnings and errors from the validation layer */

@@ -605,6 +605,10 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
         st = rb_frame_buffer(gpu, (VkDeviceSize)w * h * frame->readback_floats * sizeof(float),
                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                              true, "readback", &frame->readback, err);
+    if (st == RB_OK && !gpu->is_unified_memory)
+        st = rb_frame_buffer(gpu, (VkDeviceSize)w * h * frame->readback_floats * sizeof(float),
+                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                             false, "readback.device", &frame->readback_device, err);
     if (st)
         return st;
     frame->beauty = &frame->direct;
@@ -632,6 +636,7 @@ void rb_frame_release(struct rb_gpu *gpu, struct rb_frame *frame)
     if (!gpu || !frame)
         return;
     rb_gpu_buffer_release(gpu, &frame->readback);
+    rb_gpu_buffer_release(gpu, &frame->readback_device);
     rb_gpu_image_release(gpu, &frame->direct);
     rb_gpu_image_release(gpu, &frame->depth);
     for (int i = RB_GBUFFER_COLOR_COUNT - 1; i >= 0; i--)

@@ -76,8 +76,8 @@ enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output *
 }
 
 void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
-                           const struct rb_frame *frame, const struct rb_gpu_image *light,
-                           const struct rb_gpu_image *stats)
+                           const struct rb_frame *frame, const struct rb_gpu_buffer *target,
+                           const struct rb_gpu_image *light, const struct rb_gpu_image *stats)
 {
     /* The count starts from zero on the device, ordered before the shader's atomic adds. */
     vkCmdFillBuffer(cmd, p->nonfinite.buffer, 0, VK_WHOLE_SIZE, 0);
@@ -113,7 +113,7 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
                            VK_NULL_HANDLE);
         rb_pass_bind_image(&b, RB_BIND_OUTPUT_MOTION, frame->gbuffer[RB_GB_MOTION].view,
                            VK_NULL_HANDLE);
-        rb_pass_bind_buffer_range(&b, RB_BIND_OUTPUT_READBACK, &frame->readback, first * row_bytes,
+        rb_pass_bind_buffer_range(&b, RB_BIND_OUTPUT_READBACK, target, first * row_bytes,
                                   band.row_count * row_bytes);
         rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_NONFINITE, &p->nonfinite);
         rb_pass_bind_image(&b, RB_BIND_OUTPUT_SPECULAR, frame->gbuffer[RB_GB_SPECULAR].view,

@@ -88,11 +88,13 @@ struct rb_frame {
                                                           * emission, motion */
     struct rb_gpu_image depth;
     struct rb_gpu_image direct;
-    const struct rb_gpu_image *beauty; /* what the integrator composes; direct's own image for
-                                        * the direct integrator */
-    struct rb_gpu_buffer readback;     /* readback_floats per pixel, host-visible */
-    uint32_t layer_mask;               /* the job's layers: what the output pass packs */
-    uint32_t readback_floats;          /* rb_layer_stride(layer_mask) */
+    const struct rb_gpu_image *beauty;    /* what the integrator composes; direct's own image for
+                                           * the direct integrator */
+    struct rb_gpu_buffer readback;        /* readback_floats per pixel, host-visible */
+    struct rb_gpu_buffer readback_device; /* where output writes them and they are copied from
+                                           * into readback, without unified memory; else none */
+    uint32_t layer_mask;                  /* the job's layers: what the output pass packs */
+    uint32_t readback_floats;             /* rb_layer_stride(layer_mask) */
 };
 
 enum {
@@ -296,15 +298,16 @@ void rb_pass_direct_destroy(struct rb_pass_direct *p);
 struct rb_pass_output;
 enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output **out,
                                      struct rb_err *err);
-/* Packs beauty and layers into frame->readback, and counts the NaN and infinite floats among
- * them. light: NULL, or bdpt's RB_BDPT_LIGHT_COUNT images of gathered light (bdpt_shared.h),
- * which it textures with the diffuse and gray specular maps and adds: the direct part to the
- * direct layer, the rest as the indirect layer, both to the beauty. stats: NULL (the samples
- * and tiles layers are zero), or the hybrid's per-pixel sample counts (R diffuse, G specular)
- * and tile masks (B diffuse, A specular), copied into those layers. */
+/* Packs beauty and layers into target (frame->readback, or the device buffer it is copied from),
+ * and counts the NaN and infinite floats among them. light: NULL, or bdpt's RB_BDPT_LIGHT_COUNT
+ * images of gathered light (bdpt_shared.h), which it textures with the diffuse and gray specular
+ * maps and adds: the direct part to the direct layer, the rest as the indirect layer, both to the
+ * beauty. stats: NULL (the samples and tiles layers are zero), or the hybrid's per-pixel sample
+ * counts (R diffuse, G specular) and tile masks (B diffuse, A specular), copied into those layers.
+ */
 void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
-                           const struct rb_frame *frame, const struct rb_gpu_image *light,
-                           const struct rb_gpu_image *stats);
+                           const struct rb_frame *frame, const struct rb_gpu_buffer *target,
+                           const struct rb_gpu_image *light, const struct rb_gpu_image *stats);
 /* After the frame's submit has completed: how many floats the last record wrote to the readback
  * were NaN or infinite (0 for a clean frame). */
 uint32_t rb_pass_output_nonfinite_count(const struct rb_pass_output *p);

@@ -328,6 +328,11 @@ unpack() {
     [ -x "$rb" ] || { echo "no executable bin/raybundle in the tarball"; return 1; }
     elf="$top/libexec/raybundle"
     [ -f "$elf" ] || elf=$rb
+    note="$top"
+}
+
+# The launcher runs, once a loader is visible (setup/loader).
+run_version() {
     version=$(timeout 60 "$rb" --version) || return 1
     R set "$out" raybundle.version "$version"
     note="$version"
@@ -478,6 +483,7 @@ host_facts
 fn_step setup/kit use_kit || fatal "no usable kit"
 fn_step setup/unpack unpack || fatal "the tarball does not run"
 fn_step setup/loader loader
+fn_step setup/version run_version || fatal "the tarball does not run"
 fn_step setup/layer layer
 fn_step setup/info info info.txt
 if ! R pick "$scratch/info.txt" >/dev/null 2>&1; then
