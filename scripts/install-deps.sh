@@ -19,6 +19,7 @@ libyaml-dev libxxhash-dev libjansson-dev
 libcmocka-dev
 mandoc man-db time clang-format
 patchelf debootstrap xz-utils python3 libglvnd0 libx11-6 libxext6
+libegl1 libglx0 libopengl0 libgl1 libgles2
 chromium
 "
 if [ "${1:-}" = --farm ]; then

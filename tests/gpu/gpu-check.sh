@@ -440,6 +440,11 @@ EOF
     f=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
     [ -f "$f" ] && export __EGL_VENDOR_LIBRARY_FILENAMES=$f
     missing=$(ldd "$libpath" 2>&1 | awk '/not found/ { print $1 }')
+    # libglvnd's libraries the driver opens at run time (dlopen; ldd cannot see them).
+    for m in libEGL.so.1 libGLX.so.0 libOpenGL.so.0 libGLdispatch.so.0; do
+        ldconfig -p 2>/dev/null | awk -v l="$m" '$1 == l && /x86-64/ { f = 1 } END { exit !f }' ||
+            missing="$missing $m"
+    done
     for m in $missing; do
         if [ -f "$kit/hostlibs/$m" ]; then
             mkdir -p "$scratch/hostlibs"

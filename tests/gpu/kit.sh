@@ -53,9 +53,11 @@ layer_so=/usr/lib/x86_64-linux-gnu/libVkLayer_khronos_validation.so
 layer_json=/usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json
 loader_so=/usr/lib/x86_64-linux-gnu/libvulkan.so.1
 # The NVIDIA Vulkan driver (libGLX_nvidia.so.0) links libGLdispatch (libglvnd) and, in some
-# versions, libX11 and libXext; a bare container image may have none of them.
+# versions, libX11 and libXext; a bare container image may have none of them. It also opens
+# libglvnd's EGL and GLX libraries at run time (no ldd shows that): on an H200 image without
+# them, the loader could not get vkCreateInstance from the driver until they were there.
 hostlibs="libGLdispatch.so.0 libX11.so.6 libXext.so.6 libxcb.so.1 libXau.so.6 libXdmcp.so.6
-libbsd.so.0 libmd.so.0"
+libbsd.so.0 libmd.so.0 libEGL.so.1 libGLX.so.0 libOpenGL.so.0 libGL.so.1 libGLESv2.so.2"
 scenes=${RB_SCENES:-$repo/../shared/scenes}
 
 if [ -z "$tarball" ]; then
