@@ -2,6 +2,8 @@
 #ifndef RB_CMD_CMD_H
 #define RB_CMD_CMD_H
 
+#include <getopt.h>
+
 #include "core/core.h"
 
 enum rb_exit {
@@ -52,5 +54,24 @@ void cmd_end_bar(void);
 void cmd_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 /* The last message cmd_error printed (cut to fit), for a farm's failure line. */
 extern char cmd_last_error[512];
+
+/* A usage error of command ("render", "timing compare"; "" for raybundle itself), in one line
+ * that says where the usage is: "raybundle: error: <msg>; see 'raybundle render --help'". */
+void cmd_usage_error(const char *command, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+/* getopt_long for command, with raybundle's messages instead of getopt's: an unknown option
+ * (with the nearest known one: "did you mean '--preview'?"), an ambiguous abbreviation (with
+ * what it could be), a value missing, or given to an option that takes none. Returns what
+ * getopt_long returns, and '?' after reporting one of these (exit RB_EXIT_USAGE). Set optind = 1
+ * before the first call. */
+int cmd_getopt(int argc, char **argv, const char *shortopts, const struct option *opts,
+               const char *command);
+/* Why command does not take the long option name that another command sharing its parser takes,
+ * or NULL when it is no such option. */
+typedef const char *(*cmd_option_note_fn)(const char *name);
+/* cmd_getopt, saying note's reason when an unknown option is one that note knows. */
+int cmd_getopt_note(int argc, char **argv, const char *shortopts, const struct option *opts,
+                    const char *command, cmd_option_note_fn note);
 
 #endif

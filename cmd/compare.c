@@ -23,6 +23,7 @@ struct options {
     bool mask_alpha, json;
     uint32_t exclude_edges_px;
     double epsilon;
+    double peak; /* --peak: PSNR's peak; 0 means RB_ANALYSIS_PEAK */
     bool has_max_relmse, has_max_rmse;
     double max_relmse, max_rmse;
     /* Derived: */
@@ -44,14 +45,17 @@ static void usage(FILE *f)
         "Compares the test image A against the reference B (EXR or any image OpenImageIO\n"
         "reads), or two frame sequences given as patterns with a '#' run plus --frames.\n"
         "Prints RMSE, relative MSE, mean absolute error, PSNR and the largest error.\n"
+        "PSNR is computed with peak 1.0, i.e. for display-referred values, unless --peak\n"
+        "gives another.\n"
         "\n"
         "  --frames A-B         frames A to B (or one frame: A) of two '#' patterns\n"
         "  --layer NAME         beauty (R,G,B; default), direct, indirect, albedo (NAME.R/G/B),\n"
-        "                       normal (X/Y/Z), depth (Z), motion (X/Y)\n"
+        "                       normal (X/Y/Z), depth (Z), motion (X/Y); any case\n"
         "  --mask PATH          compare only pixels whose first channel is > 0.5\n"
         "  --mask-alpha         compare only pixels where A's and B's alpha are > 0.5\n"
         "  --exclude-edges N    skip pixels within N pixels of a depth or alpha edge in B\n"
         "  --epsilon E          relMSE = (a-b)^2 / (b^2 + E), averaged (default 0.01)\n"
+        "  --peak V             PSNR = 10 log10(V^2 / MSE) with V > 0 (default 1.0)\n"
         "  --error-image PATH   write |a-b| as R,G,B and relMSE as relmse.Y ('#' per frame)\n"
         "  --max-relmse X       exit 1 when the relative MSE exceeds X\n"
         "  --max-rmse X         exit 1 when the RMSE exceeds X\n"
@@ -105,6 +109,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         O_MASK_ALPHA,
         O_EXCLUDE_EDGES,
         O_EPSILON,
+        O_PEAK,
         O_ERROR_IMAGE,
         O_MAX_RELMSE,
         O_MAX_RMSE,
@@ -117,6 +122,7 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"mask-alpha", no_argument, NULL, O_MASK_ALPHA},
         {"exclude-edges", required_argument, NULL, O_EXCLUDE_EDGES},
         {"epsilon", required_argument, NULL, O_EPSILON},
+        {"peak", required_argument, NULL, O_PEAK},
         {"error-image", required_argument, NULL, O_ERROR_IMAGE},
         {"max-relmse", required_argument, NULL, O_MAX_RELMSE},
         {"max-rmse", required_argument, NULL, O_MAX_RMSE},
@@ -126,7 +132,7 @@ static int parse_options(int argc, char **argv, struct options *o)
     };
     int c;
     optind = 1;
-    while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
+    while ((c = cmd_getopt(argc, argv, "h", opts, "compare")) != -1) {
         switch (c) {
         case O_FRAMES: o->frames = optarg; break;
         case O_LAYER: o->layer = optarg; break;
@@ -147,6 +153,10 @@ static int parse_options(int argc, char **argv, struct options *o)
             if (parse_number("--epsilon", optarg, 0.0, true, &o->epsilon))
                 return -1;
             break;
+        case O_PEAK:
+            if (parse_number("--peak", optarg, 0.0, true, &o->peak))
+                return -1;
+            break;
         case O_ERROR_IMAGE: o->error_image = optarg; break;
         case O_MAX_RELMSE:
             if (parse_number("--max-relmse", optarg, 0.0, false, &o->max_relmse))
@@ -160,13 +170,12 @@ static int parse_options(int argc, char **argv, struct options *o)
             break;
         case O_JSON: o->json = true; break;
         case 'h': usage(stdout); return 1;
-        default: usage(stderr); return -1;
+        default: return -1; /* reported */
         }
     }
     if (argc - optind != 2) {
-        cmd_error(argc - optind < 2 ? "compare needs two images, A and B"
-                                    : "compare takes two images, A and B");
-        usage(stderr);
+        cmd_usage_error("compare", argc - optind < 2 ? "compare needs two images, A and B"
+                                                     : "compare takes two images, A and B");
         return -1;
     }
     o->a = argv[optind];
@@ -337,6 +346,7 @@ static enum rb_status compare_frame(const struct options *o, const struct rb_ana
                                            .b = b,
                                            .mask = mask,
                                            .epsilon = o->epsilon,
+                                           .peak = o->peak,
                                            .abs_error = abs_error,
                                            .rel_error = rel_error},
         out, err);
@@ -455,9 +465,9 @@ static void print_text(const struct options *o, const struct rb_analysis_layer *
     printf("%-10s %.9g\n", "relmse", m->relmse);
     printf("%-10s %.9g\n", "mae", m->mae);
     if (isinf(m->psnr))
-        printf("%-10s inf\n", "psnr");
+        printf("%-10s inf (peak %.9g)\n", "psnr", m->peak);
     else
-        printf("%-10s %.9g dB\n", "psnr", m->psnr);
+        printf("%-10s %.9g dB (peak %.9g)\n", "psnr", m->psnr, m->peak);
     printf("%-10s %.9g at (%u, %u)", "max_error", m->max_error, m->max_error_x, m->max_error_y);
     if (o->is_sequence)
         printf(" in frame %d", m->max_error_frame);

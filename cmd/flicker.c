@@ -79,7 +79,7 @@ static int parse_options(int argc, char **argv, struct options *o)
     };
     int c, formats = 0;
     optind = 1;
-    while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
+    while ((c = cmd_getopt(argc, argv, "h", opts, "flicker")) != -1) {
         switch (c) {
         case O_REFERENCE: o->desc.reference = optarg; break;
         case O_MAX_EXCESS:
@@ -101,7 +101,7 @@ static int parse_options(int argc, char **argv, struct options *o)
             formats++;
             break;
         case 'h': usage(stdout); return 1;
-        default: usage(stderr); return -1;
+        default: return -1; /* reported */
         }
     }
     const char *problem = argc - optind > 1 ? "flicker takes one sequence, SEQ"
@@ -111,8 +111,7 @@ static int parse_options(int argc, char **argv, struct options *o)
                               ? "--max-excess needs --reference REFSEQ"
                               : NULL;
     if (problem) {
-        cmd_error("%s", problem);
-        usage(stderr);
+        cmd_usage_error("flicker", "%s", problem);
         return -1;
     }
     o->desc.seq = argv[optind];

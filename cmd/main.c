@@ -1,8 +1,10 @@
 /* raybundle: the command table, the dispatcher and `raybundle help`. */
 #include "cmd.h"
 
+#include <getopt.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "job/job.h"
@@ -50,6 +52,123 @@ void cmd_error(const char *fmt, ...)
     va_end(ap);
 }
 
+void cmd_usage_error(const char *command, const char *fmt, ...)
+{
+    char msg[448];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof(msg), fmt, ap);
+    va_end(ap);
+    cmd_error("%s; see 'raybundle %s%s--help'", msg, command, command[0] ? " " : "");
+}
+
+/* The long option of opts named name[0..len), exactly or as its only abbreviation; NULL when
+ * none is, or *ambiguous when several are. */
+static const struct option *find_option(const struct option *opts, const char *name, size_t len,
+                                        bool *ambiguous)
+{
+    const struct option *found = NULL;
+    size_t matches = 0;
+    *ambiguous = false;
+    for (const struct option *o = opts; o->name; o++) {
+        if (strncmp(o->name, name, len) != 0)
+            continue;
+        if (strlen(o->name) == len)
+            return o;
+        found = o;
+        matches++;
+    }
+    *ambiguous = matches > 1;
+    return matches == 1 ? found : NULL;
+}
+
+/* Reports the option getopt_long refused with '?' (opterr is 0, so it said nothing). */
+static void bad_option(int argc, char **argv, const char *shortopts, const struct option *opts,
+                       const char *command, cmd_option_note_fn note)
+{
+    /* An unknown short option: optopt is it, and optind need not have moved past it. */
+    if (optopt > 0 && optopt < 256 && !strchr(shortopts, optopt)) {
+        cmd_usage_error(command, "unknown option '-%c'", optopt);
+        return;
+    }
+    /* Otherwise getopt_long stepped past the word it refused. */
+    const char *arg = optind > 0 && optind <= argc ? argv[optind - 1] : "";
+    if (strncmp(arg, "--", 2) != 0) { /* a short option that takes a value, last */
+        cmd_usage_error(command, "option '-%c' needs a value", optopt);
+        return;
+    }
+    const char *name = arg + 2;
+    size_t len = strcspn(name, "=");
+    bool ambiguous;
+    const struct option *o = find_option(opts, name, len, &ambiguous);
+    if (o && name[len] == '=') {
+        cmd_usage_error(command, "option '--%s' takes no value", o->name);
+    } else if (o) {
+        cmd_usage_error(command, "option '--%s' needs a value", o->name);
+    } else if (ambiguous) {
+        char list[256] = "";
+        for (const struct option *c = opts; c->name; c++)
+            if (strncmp(c->name, name, len) == 0)
+                snprintf(list + strlen(list), sizeof(list) - strlen(list), "%s'--%s'",
+                         list[0] ? ", " : "", c->name);
+        cmd_error("option '--%.*s' is ambiguous: it could be %s", (int)len, name, list);
+    } else {
+        char word[64];
+        snprintf(word, sizeof(word), "%.*s", (int)len, name);
+        const char *why = note ? note(word) : NULL;
+        struct rb_suggest near;
+        rb_suggest_init(&near, word);
+        for (const struct option *c = opts; c->name; c++)
+            rb_suggest_offer(&near, c->name, strlen(c->name));
+        if (why)
+            cmd_usage_error(command, "%s does not take '--%s': %s", command, word, why);
+        else if (near.best[0])
+            cmd_error("unknown option '--%s'; did you mean '--%s'?", word, near.best);
+        else
+            cmd_usage_error(command, "unknown option '--%s'", word);
+    }
+}
+
+int cmd_getopt_note(int argc, char **argv, const char *shortopts, const struct option *opts,
+                    const char *command, cmd_option_note_fn note)
+{
+    /* A test hook: RB_TEST_LIST_OPTIONS=1 prints the options given to getopt_long, one a line
+     * ("-o", "--output"), and stops the command as a usage error does, so that a test can hold
+     * each command's --help to its parser (tests/integration/t0012-cli-conventions.sh). */
+    const char *list = getenv("RB_TEST_LIST_OPTIONS");
+    if (list && strcmp(list, "1") == 0) {
+        for (const char *p = shortopts; *p; p++)
+            if (*p != ':')
+                printf("-%c\n", *p);
+        for (const struct option *o = opts; o->name; o++)
+            printf("--%s\n", o->name);
+        return '?';
+    }
+    opterr = 0;
+    int c = getopt_long(argc, argv, shortopts, opts, NULL);
+    if (c == '?' || c == ':')
+        bad_option(argc, argv, shortopts, opts, command, note);
+    return c == ':' ? '?' : c;
+}
+
+int cmd_getopt(int argc, char **argv, const char *shortopts, const struct option *opts,
+               const char *command)
+{
+    return cmd_getopt_note(argc, argv, shortopts, opts, command, NULL);
+}
+
+/* "; did you mean 'x'?" for the command nearest to word, or "". */
+static void suggest_command(const char *word, char *buf, size_t size)
+{
+    struct rb_suggest near;
+    rb_suggest_init(&near, word);
+    for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++)
+        rb_suggest_offer(&near, commands[i].name, strlen(commands[i].name));
+    buf[0] = '\0';
+    if (near.best[0])
+        snprintf(buf, size, "; did you mean '%s'?", near.best);
+}
+
 static void usage(FILE *f)
 {
     fprintf(f, "usage: raybundle <command> [options] [args]\n\ncommands:\n");
@@ -77,7 +196,7 @@ int cmd_help(int argc, char **argv)
 int main(int argc, char **argv)
 {
     if (argc < 2) {
-        usage(stderr);
+        cmd_usage_error("", "raybundle needs a command, such as 'render'");
         return RB_EXIT_USAGE;
     }
     if (strcmp(argv[1], "--version") == 0 || strcmp(argv[1], "version") == 0) {
@@ -89,7 +208,9 @@ int main(int argc, char **argv)
     for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++)
         if (strcmp(argv[1], commands[i].name) == 0)
             return commands[i].fn(argc - 1, argv + 1);
-    cmd_error("unknown command '%s'", argv[1]);
-    usage(stderr);
+    char hint[96];
+    suggest_command(argv[1], hint, sizeof(hint));
+    cmd_error("unknown command '%s'%s", argv[1], hint);
+    fprintf(stderr, "raybundle: 'raybundle --help' lists the commands\n");
     return RB_EXIT_USAGE;
 }

@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -47,7 +48,7 @@ struct options {
     const char *job_path;
     struct rb_job_override overrides[MAX_OVERRIDES];
     size_t override_count;
-    const char *output, *out_dir, *integrator, *device, *threads;
+    const char *output, *out_dir, *device, *threads;
     const char *spp, *time_limit; /* as given, for messages */
     bool resume, validate, preview, quiet;
     bool is_lenient; /* --lenient: glTF type errors are warnings */
@@ -65,15 +66,125 @@ struct options {
         time_limit_origin[64];
 };
 
+/* The commands of this file, as bits of a set. */
+enum { FOR_RENDER = 1 << 0, FOR_REFERENCE = 1 << 1, FOR_BENCH = 1 << 2, FOR_ALL = 7 };
+
+enum {
+    O_FRAMES = 256,
+    O_SIZE,
+    O_OUT,
+    O_INTEGRATOR,
+    O_SET,
+    O_RESUME,
+    O_PREVIEW,
+    O_DEVICE,
+    O_VALIDATE,
+    O_LENIENT,
+    O_SPP,
+    O_TIME_LIMIT,
+    O_THREADS,
+    O_STRICT,
+    O_RUNS,
+    O_CHUNK,
+    O_PROGRESS
+};
+
+/* One option of render, reference and bench. The one table that getopt, each command's --help
+ * and the note on another command's option read, so that help and parser cannot disagree. */
+struct flag {
+    const char *name; /* the long name; a letter val is its short name too */
+    int has_arg;
+    int val;
+    unsigned commands;  /* FOR_*: the commands that take it */
+    const char *arg;    /* the value in --help, or NULL */
+    const char *help;   /* --help's text; '\n' continues it on an indented line */
+    const char *absent; /* why the other commands do not take it, or NULL (all do) */
+};
+
+static const struct flag flags[] = {
+    {"frames", required_argument, O_FRAMES, FOR_ALL, "LIST",
+     "render frames A-B, or a list such as 1-3,5,7-20:2\n"
+     "(A-B:S or A-BxS steps by S); sets frames.* to its first\n"
+     "and last frame",
+     NULL},
+    {"chunk", required_argument, O_CHUNK, FOR_ALL, "I/N",
+     "render the I-th (from 0) of N even, contiguous chunks of\n"
+     "the frames; 'slurm': SLURM_ARRAY_TASK_ID's of _COUNT",
+     NULL},
+    {"size", required_argument, O_SIZE, FOR_ALL, "WxH", "set the resolution", NULL},
+    {"output", required_argument, 'o', FOR_ALL, "PATTERN",
+     "override the output pattern (#### = frame number)", NULL},
+    {"out", required_argument, O_OUT, FOR_RENDER | FOR_REFERENCE, "DIR",
+     "write into DIR, keeping the pattern's file name", NULL},
+    {"out", required_argument, O_OUT, FOR_BENCH, "DIR",
+     "the set's directory (required): each run's timing sidecars\n"
+     "go into DIR/run-01, ..., keeping the pattern's file name",
+     NULL},
+    {"runs", required_argument, O_RUNS, FOR_BENCH, "N",
+     "render the job N times, 1 to 99 (default 9)", "only bench renders a job several times"},
+    {"integrator", required_argument, O_INTEGRATOR, FOR_RENDER | FOR_BENCH, "NAME",
+     "set integrator.name: direct, bdpt, hybrid or reference\n(in any case)",
+     "it always renders with the CPU reference path tracer"},
+    {"set", required_argument, O_SET, FOR_ALL, "KEY=VALUE",
+     "override any job key by its dotted path (repeatable)", NULL},
+    {"resume", no_argument, O_RESUME, FOR_RENDER | FOR_REFERENCE, NULL,
+     "skip frames whose files are already complete",
+     "it renders every frame afresh and writes no images"},
+    {"progress", required_argument, O_PROGRESS, FOR_ALL, "MODE",
+     "auto (a bar on a terminal, lines otherwise) or openjd\n"
+     "(openjd_progress and openjd_status lines on stdout)",
+     NULL},
+    {"preview", no_argument, O_PREVIEW, FOR_RENDER | FOR_REFERENCE, NULL,
+     "also write NAME.####.png through OpenColorIO",
+     "it renders every frame afresh and writes no images"},
+    {"device", required_argument, O_DEVICE, FOR_RENDER | FOR_BENCH, "NAME|INDEX",
+     "pick a Vulkan device (default: lavapipe)", "it renders on the CPU, with no Vulkan device"},
+    {"validate", no_argument, O_VALIDATE, FOR_RENDER | FOR_BENCH, NULL,
+     "enable the Khronos validation layer; any message fails",
+     "it renders on the CPU, with no Vulkan device"},
+    {"lenient", no_argument, O_LENIENT, FOR_ALL, NULL,
+     "glTF properties of the wrong type are warnings, not errors", NULL},
+    {"strict", no_argument, O_STRICT, FOR_RENDER | FOR_BENCH, NULL,
+     "bdpt: a full ray-bundle node buffer fails the frame (exit 1)",
+     "it renders on the CPU, with no ray-bundle node buffer"},
+    {"spp", required_argument, O_SPP, FOR_ALL, "N",
+     "reference: samples per pixel (integrator.reference.spp)", NULL},
+    {"time-limit", required_argument, O_TIME_LIMIT, FOR_ALL, "S",
+     "reference: stop at the pass of samples that crosses S seconds", NULL},
+    {"threads", required_argument, O_THREADS, FOR_ALL, "N",
+     "reference: worker threads (default: all cores)", NULL},
+    {"quiet", no_argument, 'q', FOR_ALL, NULL, "no progress output", NULL},
+    {"verbose", no_argument, 'v', FOR_ALL, NULL, "more log output (repeat for debug)", NULL},
+    {"help", no_argument, 'h', FOR_ALL, NULL, "show this help", NULL},
+};
+#define FLAG_COUNT (sizeof(flags) / sizeof(flags[0]))
+
+static unsigned command_bit(const char *command)
+{
+    return strcmp(command, "reference") == 0 ? FOR_REFERENCE
+           : strcmp(command, "bench") == 0   ? FOR_BENCH
+                                             : FOR_RENDER;
+}
+
+/* For cmd_getopt_note: why an option of this file's other commands is not the one's parsed. */
+static const char *flag_absent(const char *name)
+{
+    for (size_t i = 0; i < FLAG_COUNT; i++)
+        if (strcmp(flags[i].name, name) == 0 && flags[i].absent)
+            return flags[i].absent;
+    return NULL;
+}
+
 static void usage(FILE *f, const char *command)
 {
-    if (strcmp(command, "reference") == 0)
+    unsigned bit = command_bit(command);
+    if (bit == FOR_REFERENCE)
         fprintf(f, "usage: raybundle reference JOB [options]\n"
                    "\n"
                    "Renders JOB with the CPU reference path tracer (the ground truth the GPU\n"
                    "integrators are judged against): the same files and layers as render.\n"
                    "\n");
-    else if (strcmp(command, "bench") == 0)
+    else if (bit == FOR_BENCH)
         fprintf(f, "usage: raybundle bench JOB --out DIR [--runs N] [options]\n"
                    "\n"
                    "Renders JOB N times (default 9), run by run, keeping each run's timing\n"
@@ -86,33 +197,25 @@ static void usage(FILE *f, const char *command)
                    "Renders JOB (a YAML job file, or a .gltf/.glb for a quick look) to per-frame\n"
                    "OpenEXR images with timing sidecars.\n"
                    "\n");
+    for (size_t i = 0; i < FLAG_COUNT; i++) {
+        const struct flag *g = &flags[i];
+        if (!(g->commands & bit))
+            continue;
+        char left[64], short_name[8] = "";
+        if (g->val < 256)
+            snprintf(short_name, sizeof(short_name), "-%c, ", g->val);
+        snprintf(left, sizeof(left), "  %s--%s%s%s", short_name, g->name, g->arg ? " " : "",
+                 g->arg ? g->arg : "");
+        fprintf(f, "%-22s ", left);
+        for (const char *p = g->help; *p; p++) {
+            fputc(*p, f);
+            if (*p == '\n')
+                fprintf(f, "%23s", "");
+        }
+        fputc('\n', f);
+    }
     fprintf(f,
-            "  --frames LIST        render frames A-B, or a list such as 1-3,5,7-20:2 (A-B:S\n"
-            "                       steps by S); sets frames.* to its first and last frame\n"
-            "  --chunk I/N          render the I-th (from 0) of N even, contiguous chunks of\n"
-            "                       the frames; 'slurm': SLURM_ARRAY_TASK_ID's of _COUNT\n"
-            "  --size WxH           set the resolution\n"
-            "  --output PATTERN     override the output pattern (#### = frame number)\n"
-            "  --out DIR            write into DIR, keeping the pattern's file name\n"
-            "  --integrator NAME    set integrator.name: direct, bdpt, hybrid or reference\n"
-            "                       (render only)\n"
-            "  --set KEY=VALUE      override any job key by its dotted path (repeatable)\n"
-            "  --resume             skip frames whose files are already complete\n"
-            "  --progress MODE      auto (a bar on a terminal, lines otherwise) or openjd\n"
-            "                       (openjd_progress and openjd_status lines on stdout)\n"
-            "  --preview            also write NAME.####.png through OpenColorIO\n"
-            "  --device NAME|INDEX  pick a Vulkan device (default: lavapipe)\n"
-            "  --validate           enable the Khronos validation layer; any message fails\n"
-            "  --lenient            glTF properties of the wrong type are warnings, not errors\n"
-            "  --strict             bdpt: a full ray-bundle node buffer fails the frame (exit 1)\n"
-            "  --spp N              reference: samples per pixel (integrator.reference.spp)\n"
-            "  --time-limit S       reference: stop at the pass of samples that crosses S seconds\n"
-            "  --threads N          reference: worker threads (default: all cores)\n"
-            "  -q, --quiet          no progress output\n"
-            "  -v, --verbose        more log output (repeat for debug)\n"
-            "  -h, --help           show this help\n"
-            "\n"
-            "Exit status: 0 ok, 1 rendering failed, 2 bad usage or job, 3 no usable device.\n");
+            "\nExit status: 0 ok, 1 rendering failed, 2 bad usage or job, 3 no usable device.\n");
 }
 
 static int add_override(struct options *o, const char *key, const char *value, const char *origin)
@@ -176,63 +279,53 @@ static int sugar_size(struct options *o, const char *arg)
     return add_override(o, "resolution", o->size_value, o->size_origin);
 }
 
+/* --progress auto|openjd, in any case. */
+static int parse_progress(struct options *o, const char *arg)
+{
+    static const char *const modes[] = {"auto", "openjd"};
+    struct rb_suggest near;
+    rb_suggest_init(&near, arg);
+    for (size_t i = 0; i < sizeof(modes) / sizeof(modes[0]); i++) {
+        if (strcasecmp(arg, modes[i]) == 0) {
+            o->is_openjd = i == 1;
+            return 0;
+        }
+        rb_suggest_offer(&near, modes[i], strlen(modes[i]));
+    }
+    cmd_error("--progress expects auto or openjd, got '%s'%s%s%s", arg,
+              near.best[0] ? "; did you mean '" : "", near.best, near.best[0] ? "'?" : "");
+    return -1;
+}
+
 static int parse_options(int argc, char **argv, struct options *o)
 {
-    enum {
-        O_FRAMES = 256,
-        O_SIZE,
-        O_OUTPUT,
-        O_OUT,
-        O_INTEGRATOR,
-        O_SET,
-        O_RESUME,
-        O_PREVIEW,
-        O_DEVICE,
-        O_VALIDATE,
-        O_LENIENT,
-        O_SPP,
-        O_TIME_LIMIT,
-        O_THREADS,
-        O_STRICT,
-        O_RUNS,
-        O_CHUNK,
-        O_PROGRESS
-    };
-    static const struct option opts[] = {
-        {"frames", required_argument, NULL, O_FRAMES},
-        {"size", required_argument, NULL, O_SIZE},
-        {"output", required_argument, NULL, O_OUTPUT},
-        {"out", required_argument, NULL, O_OUT},
-        {"integrator", required_argument, NULL, O_INTEGRATOR},
-        {"set", required_argument, NULL, O_SET},
-        {"resume", no_argument, NULL, O_RESUME},
-        {"preview", no_argument, NULL, O_PREVIEW},
-        {"device", required_argument, NULL, O_DEVICE},
-        {"validate", no_argument, NULL, O_VALIDATE},
-        {"spp", required_argument, NULL, O_SPP},
-        {"time-limit", required_argument, NULL, O_TIME_LIMIT},
-        {"threads", required_argument, NULL, O_THREADS},
-        {"lenient", no_argument, NULL, O_LENIENT},
-        {"strict", no_argument, NULL, O_STRICT},
-        {"runs", required_argument, NULL, O_RUNS},
-        {"chunk", required_argument, NULL, O_CHUNK},
-        {"progress", required_argument, NULL, O_PROGRESS},
-        {"quiet", no_argument, NULL, 'q'},
-        {"verbose", no_argument, NULL, 'v'},
-        {"help", no_argument, NULL, 'h'},
-        {0},
-    };
+    /* getopt's table and short options: the rows of this command */
+    unsigned bit = command_bit(o->command);
+    struct option opts[FLAG_COUNT + 1];
+    char shortopts[2 * FLAG_COUNT + 1];
+    size_t n = 0, ns = 0;
+    for (size_t i = 0; i < FLAG_COUNT; i++) {
+        if (!(flags[i].commands & bit))
+            continue;
+        opts[n++] = (struct option){flags[i].name, flags[i].has_arg, NULL, flags[i].val};
+        if (flags[i].val < 256) {
+            shortopts[ns++] = (char)flags[i].val;
+            if (flags[i].has_arg == required_argument)
+                shortopts[ns++] = ':';
+        }
+    }
+    opts[n] = (struct option){0};
+    shortopts[ns] = '\0';
     int c;
     optind = 1;
-    while ((c = getopt_long(argc, argv, "qvh", opts, NULL)) != -1) {
+    while ((c = cmd_getopt_note(argc, argv, shortopts, opts, o->command, flag_absent)) != -1) {
         int bad = 0;
         switch (c) {
         case O_FRAMES: bad = sugar_frames(o, optarg); break;
         case O_SIZE: bad = sugar_size(o, optarg); break;
-        case O_OUTPUT: o->output = optarg; break;
+        case 'o': o->output = optarg; break;
         case O_OUT: o->out_dir = optarg; break;
         case O_INTEGRATOR:
-            o->integrator = optarg;
             snprintf(o->integrator_origin, sizeof(o->integrator_origin), "--integrator '%s'",
                      optarg);
             bad = add_override(o, "integrator.name", optarg, o->integrator_origin);
@@ -266,32 +359,24 @@ static int parse_options(int argc, char **argv, struct options *o)
         case O_THREADS: o->threads = optarg; break;
         case O_LENIENT: o->is_lenient = true; break;
         case O_STRICT: o->is_strict = true; break;
-        case O_RUNS:
-            if (strcmp(o->command, "bench") != 0) {
-                cmd_error("--runs is an option of 'raybundle bench'");
-                return -1;
-            }
-            o->runs = optarg;
-            break;
+        case O_RUNS: o->runs = optarg; break;
         case O_CHUNK: bad = parse_chunk(o, optarg); break;
-        case O_PROGRESS:
-            if (strcmp(optarg, "auto") != 0 && strcmp(optarg, "openjd") != 0) {
-                cmd_error("--progress expects auto or openjd, got '%s'", optarg);
-                return -1;
-            }
-            o->is_openjd = strcmp(optarg, "openjd") == 0;
-            break;
+        case O_PROGRESS: bad = parse_progress(o, optarg); break;
         case 'q': o->quiet = true; break;
         case 'v': o->verbose++; break;
         case 'h': usage(stdout, o->command); return 1;
-        default: usage(stderr, o->command); return -1;
+        default: return -1; /* reported */
         }
         if (bad)
             return -1;
     }
-    if (optind != argc - 1) {
-        cmd_error(optind >= argc ? "%s needs a JOB" : "%s takes one JOB", o->command);
-        usage(stderr, o->command);
+    if (optind >= argc) {
+        cmd_usage_error(o->command, "%s needs a job file", o->command);
+        return -1;
+    }
+    if (optind < argc - 1) {
+        cmd_usage_error(o->command, "%s takes one job file, and '%s' is a second", o->command,
+                        argv[optind + 1]);
         return -1;
     }
     o->job_path = argv[optind];
@@ -307,11 +392,7 @@ static int parse_options(int argc, char **argv, struct options *o)
  * job file) and refuses the options that the job's integrator would ignore. */
 static int apply_cli(const struct options *o, struct rb_job *job)
 {
-    bool is_reference = strcmp(o->command, "reference") == 0;
-    if (is_reference && o->integrator) {
-        cmd_error("reference renders with the CPU reference; --integrator is for render");
-        return -1;
-    }
+    bool is_reference = strcmp(o->command, "reference") == 0; /* which takes no --integrator */
     if (is_reference)
         job->integrator.name = RB_INTEGRATOR_REFERENCE;
     if (job->integrator.name != RB_INTEGRATOR_REFERENCE) {
@@ -692,11 +773,8 @@ static int bench_runs(struct options *o, int argc, char **argv, cmd_bench_fn on_
     int rc = parse_options(argc, argv, o);
     if (rc)
         return rc > 0 ? RB_EXIT_OK : RB_EXIT_USAGE;
-    if (!o->out_dir || o->resume || o->preview) {
-        cmd_error(!o->out_dir ? "bench needs --out DIR, the directory of the set"
-                              : "bench renders every frame afresh and writes no images: "
-                                "--resume and --preview do not apply");
-        usage(stderr, o->command);
+    if (!o->out_dir) { /* its parser takes no --resume or --preview */
+        cmd_usage_error("bench", "bench needs --out DIR, the directory of the set");
         return RB_EXIT_USAGE;
     }
     struct cmd_bench_run b = {

@@ -60,7 +60,7 @@ int cmd_report(int argc, char **argv)
     long v;
     int c;
     optind = 1;
-    while ((c = getopt_long(argc, argv, "ho:", opts, NULL)) != -1) {
+    while ((c = cmd_getopt(argc, argv, "ho:", opts, "report")) != -1) {
         switch (c) {
         case O_REFERENCE: desc.reference_dir = optarg; break;
         case 'o': output = optarg; break;
@@ -80,18 +80,16 @@ int cmd_report(int argc, char **argv)
             desc.filmstrip_max = v ? (size_t)v : SIZE_MAX;
             break;
         case 'h': usage(stdout); return RB_EXIT_OK;
-        default: usage(stderr); return RB_EXIT_USAGE;
+        default: return RB_EXIT_USAGE; /* reported */
         }
     }
     if (argc - optind != 1) {
-        cmd_error(argc - optind ? "report takes one sequence directory, SEQ"
-                                : "report needs a sequence directory, SEQ");
-        usage(stderr);
+        cmd_usage_error("report", argc - optind ? "report takes one sequence directory, SEQ"
+                                                : "report needs a sequence directory, SEQ");
         return RB_EXIT_USAGE;
     }
     if (!output) {
-        cmd_error("report needs -o REPORT.html");
-        usage(stderr);
+        cmd_usage_error("report", "report needs -o REPORT.html");
         return RB_EXIT_USAGE;
     }
     desc.dir = argv[optind];

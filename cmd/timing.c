@@ -153,7 +153,7 @@ static int compare(int argc, char **argv)
     bool is_json = false, is_forced = false;
     int c;
     optind = 1;
-    while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
+    while ((c = cmd_getopt(argc, argv, "h", opts, "timing compare")) != -1) {
         int bad = 0;
         switch (c) {
         case O_THRESHOLD:
@@ -163,14 +163,14 @@ static int compare(int argc, char **argv)
         case O_JSON: is_json = true; break;
         case O_FORCE: is_forced = true; break;
         case 'h': usage(stdout); return RB_EXIT_OK;
-        default: usage(stderr); return RB_EXIT_USAGE;
+        default: return RB_EXIT_USAGE; /* reported */
         }
         if (bad)
             return RB_EXIT_USAGE;
     }
     if (argc - optind != 2) {
-        cmd_error("timing compare takes BASE and NEW, two bench directories");
-        usage(stderr);
+        cmd_usage_error("timing compare", "timing compare %s BASE and NEW, two bench directories",
+                        argc - optind < 2 ? "needs" : "takes");
         return RB_EXIT_USAGE;
     }
     struct rb_err err = RB_ERR_INIT;
@@ -230,8 +230,17 @@ int cmd_timing(int argc, char **argv)
         usage(stdout);
         return RB_EXIT_OK;
     }
-    if (argc > 1)
-        cmd_error("unknown timing command '%s' (try 'raybundle timing compare')", argv[1]);
-    usage(stderr);
+    if (argc < 2) {
+        cmd_usage_error("timing", "timing needs a command: 'timing compare BASE NEW'");
+        return RB_EXIT_USAGE;
+    }
+    struct rb_suggest near;
+    rb_suggest_init(&near, argv[1]);
+    rb_suggest_offer(&near, "compare", strlen("compare"));
+    if (near.best[0])
+        cmd_error("unknown timing command '%s'; did you mean 'compare'?", argv[1]);
+    else
+        cmd_usage_error("timing", "unknown timing command '%s' (its one command is 'compare')",
+                        argv[1]);
     return RB_EXIT_USAGE;
 }

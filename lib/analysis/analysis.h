@@ -11,6 +11,10 @@
 
 /* relMSE's epsilon: (a-b)^2 / (b^2 + eps), so that black reference pixels do not dominate. */
 #define RB_ANALYSIS_EPSILON 1e-2
+/* PSNR's peak: the largest value a pixel is taken to reach. 1 suits display-referred values;
+ * scene-linear renders have no natural peak, and a reference's own largest value (an
+ * emitter's, tens of times brighter than any lit surface) would flatter every error. */
+#define RB_ANALYSIS_PEAK 1.0
 /* Depth differing by more than this fraction between 4-neighbours marks an edge. */
 #define RB_ANALYSIS_EDGE_DEPTH_REL 0.05
 /* Alpha differing by more than this between 4-neighbours marks an edge. */
@@ -33,15 +37,19 @@ struct rb_analysis_layer {
     char channels[RB_ANALYSIS_MAX_CHANNELS][80];
 };
 
-/* Fills out for the layer called name (NULL or "" is "beauty"). Fails with RB_E_INVALID for a
- * name that is too long or holds '.', '/' or spaces. */
+/* Fills out for the layer called name (NULL or "" is "beauty"). The beauty and the layers the
+ * renderer writes are found whatever the case of name ("Normal" is "normal"); any other name
+ * is kept as given. Fails with RB_E_INVALID for a name that is too long or holds '.', '/' or
+ * spaces. */
 enum rb_status rb_analysis_layer_resolve(const char *name, struct rb_analysis_layer *out,
                                          struct rb_err *err);
 
 /* Copies the layer's channels out of img into a new interleaved array of
- * width*height*layer->channel_count floats, which the caller frees with free(). *out is
- * written only on success. A missing channel fails with RB_E_INVALID and a message naming path
- * (used only for the message), the layer and its channels. */
+ * width*height*layer->channel_count floats, which the caller frees with free(). A channel
+ * "layer.C" is img's of that name or else the first whose layer is the same but for case (C
+ * itself must match). *out is written only on success. A missing layer fails with
+ * RB_E_INVALID and a message naming path (used only for the message), the layer and the layers
+ * img has; a layer img has in part, naming the missing channel and the layer's channels. */
 enum rb_status rb_analysis_layer_extract(const struct rb_analysis_layer *layer,
                                          const struct rb_io_image *img, const char *path,
                                          float **out, struct rb_err *err);
@@ -90,6 +98,7 @@ struct rb_analysis_compare_desc {
     const float *b;         /* the reference, the same shape */
     const uint8_t *mask;    /* width*height, nonzero compares the pixel; NULL compares all */
     double epsilon;         /* relMSE's eps; 0 means RB_ANALYSIS_EPSILON; never negative */
+    double peak;            /* PSNR's peak; 0 means RB_ANALYSIS_PEAK; never negative */
     /* Optional outputs, written for every pixel (0 where excluded): */
     float *abs_error; /* width*height*channel_count: |a - b| */
     float *rel_error; /* width*height: (a-b)^2 / (b^2 + eps), averaged over the channels */
@@ -109,7 +118,7 @@ struct rb_analysis_metrics {
     int max_error_frame;               /* its frame, as given to rb_analysis_metrics_add */
     /* Derived: */
     double mse, rmse, relmse, mae; /* means over pixels and channels; 0 when nothing compared */
-    double peak;                   /* max_b, or 1 when that is not positive */
+    double peak;                   /* PSNR's peak, as the desc gave it (RB_ANALYSIS_PEAK) */
     double psnr;                   /* 10 log10(peak^2 / mse) in dB; INFINITY when mse == 0 */
 };
 
@@ -120,8 +129,9 @@ struct rb_analysis_metrics {
 enum rb_status rb_analysis_compare(const struct rb_analysis_compare_desc *desc,
                                    struct rb_analysis_metrics *out, struct rb_err *err);
 
-/* Adds frame's sums into total (start from a zeroed struct) and re-derives total's metrics.
- * The largest error keeps the earliest frame on ties, so add frames in order. */
+/* Adds frame's sums into total (start from a zeroed struct) and re-derives total's metrics,
+ * with the frame's peak (the frames of one sequence share one). The largest error keeps the
+ * earliest frame on ties, so add frames in order. */
 void rb_analysis_metrics_add(struct rb_analysis_metrics *total,
                              const struct rb_analysis_metrics *frame, int frame_number);
 

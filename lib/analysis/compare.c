@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 /* ---- layers ----------------------------------------------------------------------------- */
 
@@ -26,13 +27,18 @@ enum rb_status rb_analysis_layer_resolve(const char *name, struct rb_analysis_la
                        sizeof(l.name) - 1);
     if (strpbrk(name, "./ \t\n"))
         return rb_errf(err, RB_E_INVALID, "bad layer name '%s': no '.', '/' or spaces", name);
-    rb_strlcpy(l.name, name, sizeof(l.name));
-    /* A layer the renderer writes has its channels (rb_layer_channel); any other is RGB. */
+    /* A layer the renderer writes has its channels (rb_layer_channel) and its own spelling,
+     * whatever the case it is asked for in; any other is RGB, spelt as asked. */
     uint32_t known = 0;
-    while (known < RB_LAYER_COUNT && strcmp(name, rb_layer_name((enum rb_layer)known)))
+    while (known < RB_LAYER_COUNT && strcasecmp(name, rb_layer_name((enum rb_layer)known)))
         known++;
+    bool is_beauty = !strcasecmp(name, "beauty");
+    if (is_beauty)
+        name = "beauty";
+    else if (known < RB_LAYER_COUNT)
+        name = rb_layer_name((enum rb_layer)known);
+    rb_strlcpy(l.name, name, sizeof(l.name));
     l.channel_count = known < RB_LAYER_COUNT ? rb_layer_width((enum rb_layer)known) : 3;
-    bool is_beauty = !strcmp(name, "beauty");
     for (uint32_t c = 0; c < l.channel_count; c++)
         snprintf(l.channels[c], sizeof(l.channels[c]), "%s%s%s", is_beauty ? "" : name,
                  is_beauty ? "" : ".",
@@ -55,6 +61,60 @@ static const char *channel_list(const struct rb_analysis_layer *layer, char *buf
     return buf;
 }
 
+/* Where the channel "layer.C" (or a beauty's "C") is in img: that very name, or else the
+ * first channel whose layer is the same but for case, with the same C. -1 when neither. */
+static int find_channel(const struct rb_io_image *img, const char *name)
+{
+    int exact = rb_io_image_channel(img, name);
+    const char *base = rb_io_channel_base(name);
+    size_t len = base == name ? 0 : (size_t)(base - name); /* the layer and its '.' */
+    if (exact >= 0 || !len)
+        return exact;
+    for (uint32_t c = 0; c < img->channel_count; c++) {
+        const char *other = img->channel_names[c];
+        if (other && rb_io_channel_base(other) == other + len && !strncasecmp(other, name, len) &&
+            !strcmp(other + len, base))
+            return (int)c;
+    }
+    return -1;
+}
+
+/* True when img has a channel of the layer, whatever the case of the layer's name. */
+static bool has_layer(const struct rb_io_image *img, const struct rb_analysis_layer *layer)
+{
+    bool is_beauty = !strcmp(layer->name, "beauty");
+    size_t len = strlen(layer->name);
+    for (uint32_t c = 0; c < img->channel_count; c++) {
+        const char *name = img->channel_names[c];
+        const char *base = name ? rb_io_channel_base(name) : NULL;
+        if (base && (is_beauty ? base == name
+                               : base == name + len + 1 && !strncasecmp(name, layer->name, len)))
+            return true;
+    }
+    return false;
+}
+
+/* The names of img's layers, "beauty, direct, normal", into buf (the message's list; cut to
+ * fit, and "?" when they cannot be listed for want of memory). */
+static const char *layer_names(const struct rb_io_image *img, char *buf, size_t size)
+{
+    struct rb_io_image_layers layers;
+    size_t len = 0;
+    buf[0] = '\0';
+    if (rb_io_image_layers_init(&layers, img, NULL) != RB_OK)
+        snprintf(buf, size, "?");
+    else if (!layers.count)
+        snprintf(buf, size, "none");
+    for (size_t i = 0; buf[0] != '?' && i < layers.count && len < size; i++) {
+        int n = snprintf(buf + len, size - len, "%s%s", i ? ", " : "", layers.layers[i].name);
+        if (n < 0)
+            break;
+        len += (size_t)n;
+    }
+    rb_io_image_layers_release(&layers);
+    return buf;
+}
+
 enum rb_status rb_analysis_layer_extract(const struct rb_analysis_layer *layer,
                                          const struct rb_io_image *img, const char *path,
                                          float **out, struct rb_err *err)
@@ -69,14 +129,18 @@ enum rb_status rb_analysis_layer_extract(const struct rb_analysis_layer *layer,
     if (layer->channel_count < 1 || layer->channel_count > RB_ANALYSIS_MAX_CHANNELS)
         return rb_errf(err, RB_E_INVALID, "layer '%s' has %u channels (1..%d)", layer->name,
                        layer->channel_count, RB_ANALYSIS_MAX_CHANNELS);
-    for (uint32_t c = 0; c < layer->channel_count; c++) {
-        index[c] = rb_io_image_channel(img, layer->channels[c]);
+    for (uint32_t c = 0; c < layer->channel_count; c++)
+        index[c] = find_channel(img, layer->channels[c]);
+    for (uint32_t c = 0; c < layer->channel_count; c++)
+        if (index[c] < 0 && !has_layer(img, layer))
+            return rb_errf(err, RB_E_INVALID, "'%s' has no layer '%s'; its layers: %s", path,
+                           layer->name, layer_names(img, list, sizeof(list)));
+    for (uint32_t c = 0; c < layer->channel_count; c++)
         if (index[c] < 0)
             return rb_errf(err, RB_E_INVALID,
                            "'%s' has no layer '%s': channel '%s' is missing (the layer is %s)",
                            path, layer->name, layer->channels[c],
                            channel_list(layer, list, sizeof(list)));
-    }
     size_t n = (size_t)img->width_px * img->height_px;
     if (!n)
         return rb_errf(err, RB_E_INVALID, "'%s' is empty (%ux%u)", path, img->width_px,
@@ -222,7 +286,8 @@ static void derive(struct rb_analysis_metrics *m)
     m->rmse = sqrt(m->mse);
     m->relmse = m->value_count ? m->sum_rel_error / n : 0.0;
     m->mae = m->value_count ? m->sum_abs_error / n : 0.0;
-    m->peak = m->value_count && m->max_b > 0.0 ? m->max_b : 1.0;
+    if (!(m->peak > 0.0))
+        m->peak = RB_ANALYSIS_PEAK;
     m->psnr = m->mse > 0.0 ? 10.0 * log10(m->peak * m->peak / m->mse) : INFINITY;
 }
 
@@ -243,7 +308,11 @@ enum rb_status rb_analysis_compare(const struct rb_analysis_compare_desc *desc,
         return rb_errf(err, RB_E_INVALID, "compare: epsilon %g is not a finite value >= 0",
                        desc->epsilon);
 
-    struct rb_analysis_metrics m = {0};
+    if (!(desc->peak >= 0.0) || isinf(desc->peak))
+        return rb_errf(err, RB_E_INVALID, "compare: peak %g is not a finite value >= 0",
+                       desc->peak);
+
+    struct rb_analysis_metrics m = {.peak = desc->peak};
     const double eps = desc->epsilon > 0.0 ? desc->epsilon : RB_ANALYSIS_EPSILON;
     const uint32_t nc = desc->channel_count;
     const size_t w = desc->width_px, n = w * desc->height_px;
@@ -298,6 +367,8 @@ void rb_analysis_metrics_add(struct rb_analysis_metrics *total,
     if (!total || !frame)
         return;
     total->nonfinite_count += frame->nonfinite_count;
+    if (frame->peak > 0.0)
+        total->peak = frame->peak;
     if (frame->value_count) {
         if (!total->value_count || frame->max_b > total->max_b)
             total->max_b = frame->max_b;

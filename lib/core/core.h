@@ -87,6 +87,25 @@ double rb_monotonic_s(void);
 /* Reads a whole file into a new NUL-terminated buffer. */
 enum rb_status rb_read_file(const char *path, char **out, size_t *out_size, struct rb_err *err);
 
+/* ---- suggestions (suggest.c) ---------------------------------------------------------------- */
+
+/* The number of edits (insert, delete or change a character, or swap two neighbours) that turn
+ * a[0..la) into b[0..lb), ignoring ASCII case; SIZE_MAX when either is longer than 64. */
+size_t rb_edit_distance(const char *a, size_t la, const char *b, size_t lb);
+
+/* The candidate nearest to a mistyped word, for "did you mean 'x'?": init with the word, offer
+ * every candidate, then read best. A candidate is close enough within two edits that are at
+ * most a third of the longer length; the first of equally near ones wins, and a candidate that
+ * equals the word but for case is nearest of all. Caller storage; word is borrowed. */
+struct rb_suggest {
+    const char *word;
+    size_t distance; /* best's edits; SIZE_MAX while none is close enough */
+    char best[48];   /* "" while none is close enough; longer names are not offered */
+};
+void rb_suggest_init(struct rb_suggest *s, const char *word);
+/* Offers the candidate name[0..len) (not NUL-terminated there). */
+void rb_suggest_offer(struct rb_suggest *s, const char *name, size_t len);
+
 /* ---- hashing ----------------------------------------------------------------------------- */
 
 /* FNV-1a, 64 bits; chain by passing the previous value as seed (start with RB_HASH_SEED). */

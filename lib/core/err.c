@@ -55,7 +55,7 @@ const char *rb_status_name(enum rb_status st)
 RB_NORETURN void rb_bug(const char *file, int line, const char *fmt, ...)
 {
     va_list ap;
-    fprintf(stderr, "BUG: %s:%d: ", file, line);
+    fprintf(stderr, "raybundle: BUG: %s:%d: ", file, line);
     va_start(ap, fmt);
     vfprintf(stderr, fmt, ap);
     va_end(ap);

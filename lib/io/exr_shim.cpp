@@ -2,14 +2,17 @@
 // turns OpenEXR's exceptions into a message, and decides nothing that io.c could decide instead.
 #include "io/exr_shim.h"
 
+#include <ImfBoxAttribute.h>
 #include <ImfChannelList.h>
 #include <ImfChromaticitiesAttribute.h>
+#include <ImfCompressionAttribute.h>
 #include <ImfDoubleAttribute.h>
 #include <ImfFloatAttribute.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfIntAttribute.h>
+#include <ImfLineOrderAttribute.h>
 #include <ImfMatrixAttribute.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
@@ -76,7 +79,9 @@ bool before(const channel_key &a, const channel_key &b)
 
 struct rb_exr_input {
     std::unique_ptr<Imf::InputFile> file;
-    std::vector<std::string> names; // reading order
+    std::vector<std::string> names;      // reading order
+    std::vector<std::string> attr_names; // the header's order (by name)
+    std::vector<std::string> attr_types; // OpenEXR's type names, e.g. "string", "box2i"
     int min_x = 0, min_y = 0, width = 0, height = 0;
 };
 
@@ -188,6 +193,10 @@ extern "C" int rb_exr_open(const char *path, struct rb_exr_input **out, uint32_t
         std::stable_sort(keys.begin(), keys.end(), before);
         for (const auto &k : keys)
             in->names.push_back(k.name);
+        for (auto it = h.begin(); it != h.end(); ++it) {
+            in->attr_names.push_back(it.name());
+            in->attr_types.push_back(it.attribute().typeName());
+        }
         in->min_x = dw.min.x;
         in->min_y = dw.min.y;
         in->width = dw.max.x - dw.min.x + 1;
@@ -251,6 +260,11 @@ extern "C" bool rb_exr_attr_text(const struct rb_exr_input *in, const char *name
                 v += ", ";
             v += num;
         };
+        auto addi = [&](int x) {
+            if (!v.empty())
+                v += ", ";
+            v += std::to_string(x);
+        };
         if (auto s = dynamic_cast<const Imf::StringAttribute *>(a)) {
             v = s->value();
         } else if (auto i = dynamic_cast<const Imf::IntAttribute *>(a)) {
@@ -273,6 +287,33 @@ extern "C" bool rb_exr_attr_text(const struct rb_exr_input *in, const char *name
         } else if (auto v2 = dynamic_cast<const Imf::V2fAttribute *>(a)) {
             add(v2->value().x);
             add(v2->value().y);
+        } else if (auto v2i = dynamic_cast<const Imf::V2iAttribute *>(a)) {
+            addi(v2i->value().x);
+            addi(v2i->value().y);
+        } else if (auto v3 = dynamic_cast<const Imf::V3fAttribute *>(a)) {
+            add(v3->value().x);
+            add(v3->value().y);
+            add(v3->value().z);
+        } else if (auto box = dynamic_cast<const Imf::Box2iAttribute *>(a)) {
+            addi(box->value().min.x);
+            addi(box->value().min.y);
+            addi(box->value().max.x);
+            addi(box->value().max.y);
+        } else if (auto co = dynamic_cast<const Imf::CompressionAttribute *>(a)) {
+            static const char *const names[] = {"none",  "rle", "zips", "zip",  "piz",
+                                                "pxr24", "b44", "b44a", "dwaa", "dwab"};
+            int id = int(co->value());
+            if (id >= 0 && id < int(sizeof(names) / sizeof(names[0])))
+                v = names[id];
+            else
+                v = std::to_string(id);
+        } else if (auto lo = dynamic_cast<const Imf::LineOrderAttribute *>(a)) {
+            static const char *const names[] = {"increasing y", "decreasing y", "random y"};
+            int id = int(lo->value());
+            if (id >= 0 && id < 3)
+                v = names[id];
+            else
+                v = std::to_string(id);
         } else {
             return false;
         }
@@ -282,6 +323,25 @@ extern "C" bool rb_exr_attr_text(const struct rb_exr_input *in, const char *name
     } catch (...) {
         return false;
     }
+}
+
+extern "C" size_t rb_exr_attr_count(const struct rb_exr_input *in) noexcept
+{
+    return in ? in->attr_names.size() : 0;
+}
+
+extern "C" const char *rb_exr_attr_name(const struct rb_exr_input *in, size_t i) noexcept
+{
+    if (!in || i >= in->attr_names.size())
+        return "";
+    return in->attr_names[i].c_str();
+}
+
+extern "C" const char *rb_exr_attr_type(const struct rb_exr_input *in, size_t i) noexcept
+{
+    if (!in || i >= in->attr_types.size())
+        return "";
+    return in->attr_types[i].c_str();
 }
 
 extern "C" void rb_exr_close(struct rb_exr_input *in) noexcept

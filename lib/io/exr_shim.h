@@ -71,10 +71,17 @@ const char *rb_exr_channel_name(const struct rb_exr_input *in, uint32_t i) RB_EX
 /* Reads every pixel of the data window, every channel as float, in reading order. */
 int rb_exr_read(struct rb_exr_input *in, float *pixels, char *msg, size_t msg_size) RB_EXR_NOEXCEPT;
 /* Formats the named header attribute as text into out: strings verbatim, ints in decimal,
- * floats with %g, vectors and matrices as their numbers separated by ", ". False when absent
- * or of a type this does not format. */
+ * floats with %g, vectors, boxes (min x, min y, max x, max y) and matrices as their numbers
+ * separated by ", ", compression and line order by name ("zip", "increasing y"). False when
+ * absent or of a type this does not format. */
 bool rb_exr_attr_text(const struct rb_exr_input *in, const char *name, char *out,
                       size_t size) RB_EXR_NOEXCEPT;
+/* The number of header attributes (OpenEXR's required ones included). */
+size_t rb_exr_attr_count(const struct rb_exr_input *in) RB_EXR_NOEXCEPT;
+/* The name of attribute i, in the header's order (by name), and OpenEXR's name for its type
+ * ("string", "m44f", "box2i", ...); "" past the end. Valid until rb_exr_close. */
+const char *rb_exr_attr_name(const struct rb_exr_input *in, size_t i) RB_EXR_NOEXCEPT;
+const char *rb_exr_attr_type(const struct rb_exr_input *in, size_t i) RB_EXR_NOEXCEPT;
 /* Closes and frees; NULL is fine. */
 void rb_exr_close(struct rb_exr_input *in) RB_EXR_NOEXCEPT;
 

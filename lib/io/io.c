@@ -659,6 +659,165 @@ bool rb_io_image_attr(const char *path, const char *name, char *out, size_t size
 #endif
 }
 
+enum rb_status rb_io_image_attrs_read(const char *path, struct rb_io_image_attrs *out,
+                                      struct rb_err *err)
+{
+    struct rb_exr_input *in = NULL;
+    struct stat sb;
+    uint32_t w, h, n;
+    char msg[400];
+    enum rb_status st = RB_OK;
+
+    if (!out)
+        return rb_errf(err, RB_E_INVALID, "read attributes: no output");
+    *out = (struct rb_io_image_attrs){0};
+    if (!path || !*path)
+        return rb_errf(err, RB_E_INVALID, "read attributes: no path");
+    if (stat(path, &sb) != 0)
+        return rb_errf(err, RB_E_IO, "cannot read '%s': %s", path, strerror(errno));
+    if (!rb_exr_is_exr(path))
+        return RB_OK;
+    if (rb_exr_open(path, &in, &w, &h, &n, msg, sizeof(msg)) != RB_EXR_OK)
+        return rb_errf(err, RB_E_EXTERNAL, "cannot read '%s': %s", path, msg);
+    size_t count = rb_exr_attr_count(in);
+    out->names = calloc(count ? count : 1, sizeof(*out->names));
+    out->values = calloc(count ? count : 1, sizeof(*out->values));
+    if (!out->names || !out->values) {
+        st = rb_errf(err, RB_E_NOMEM, "cannot read '%s': out of memory", path);
+        goto out;
+    }
+    for (size_t i = 0; i < count; i++) {
+        const char *name = rb_exr_attr_name(in, i);
+        char text[4096];
+        if (!rb_exr_attr_text(in, name, text, sizeof(text)))
+            snprintf(text, sizeof(text), "(%s)", rb_exr_attr_type(in, i));
+        out->names[i] = rb_strdup(name);
+        out->values[i] = rb_strdup(text);
+        out->count = i + 1;
+        if (!out->names[i] || !out->values[i]) {
+            st = rb_errf(err, RB_E_NOMEM, "cannot read '%s': out of memory", path);
+            goto out;
+        }
+    }
+out:
+    rb_exr_close(in);
+    return st;
+}
+
+void rb_io_image_attrs_release(struct rb_io_image_attrs *a)
+{
+    if (!a)
+        return;
+    for (size_t i = 0; i < a->count; i++) {
+        free(a->names[i]);
+        free(a->values[i]);
+    }
+    free(a->names);
+    free(a->values);
+    *a = (struct rb_io_image_attrs){0};
+}
+
+const char *rb_io_channel_base(const char *name)
+{
+    const char *dot = name ? strrchr(name, '.') : NULL;
+    return dot ? dot + 1 : name;
+}
+
+/* The length of the layer part of a channel name: 0 for the beauty's. */
+static size_t layer_part(const char *name)
+{
+    const char *dot = strrchr(name, '.');
+    return dot ? (size_t)(dot - name) : 0;
+}
+
+/* Where a layer goes in the listing: the beauty (len 0), then raybundle's layers in the order of
+ * enum rb_layer, then every other. */
+static uint32_t layer_rank(const char *name, size_t len)
+{
+    if (!len)
+        return 0;
+    for (uint32_t l = 0; l < RB_LAYER_COUNT; l++) {
+        const char *known = rb_layer_name((enum rb_layer)l);
+        if (strlen(known) == len && !strncmp(known, name, len))
+            return 1 + l;
+    }
+    return 1 + RB_LAYER_COUNT;
+}
+
+enum rb_status rb_io_image_layers_init(struct rb_io_image_layers *out,
+                                       const struct rb_io_image *img, struct rb_err *err)
+{
+    if (!out)
+        return rb_errf(err, RB_E_INVALID, "image layers: no output");
+    *out = (struct rb_io_image_layers){0};
+    if (!img)
+        return rb_errf(err, RB_E_INVALID, "image layers: no image");
+    uint32_t n = img->channel_count;
+    uint32_t *rank = calloc(n ? n : 1, sizeof(*rank));
+    out->layers = calloc(n ? n : 1, sizeof(*out->layers));
+    if (!rank || !out->layers) {
+        free(rank);
+        return rb_errf(err, RB_E_NOMEM, "image layers: out of memory");
+    }
+    for (uint32_t c = 0; c < n; c++) {
+        const char *name = img->channel_names[c];
+        size_t len = layer_part(name);
+        size_t k = 0;
+        /* The layer whose first channel has the same layer part. */
+        while (k < out->count) {
+            const char *first = img->channel_names[out->layers[k].channels[0]];
+            if (layer_part(first) == len && !strncmp(first, name, len))
+                break;
+            k++;
+        }
+        struct rb_io_image_layer *l = &out->layers[k];
+        if (k == out->count) {
+            if (!(l->channels = calloc(n, sizeof(*l->channels))) ||
+                !(l->name = malloc(len ? len + 1 : sizeof("beauty")))) {
+                free(l->channels);
+                *l = (struct rb_io_image_layer){0};
+                free(rank);
+                return rb_errf(err, RB_E_NOMEM, "image layers: out of memory");
+            }
+            if (len) {
+                memcpy(l->name, name, len);
+                l->name[len] = '\0';
+            } else {
+                memcpy(l->name, "beauty", sizeof("beauty"));
+            }
+            rank[k] = layer_rank(name, len);
+            out->count++;
+        }
+        l->channels[l->channel_count++] = c;
+    }
+    /* A stable insertion sort by rank: layers of one rank keep the order of the channels. */
+    for (size_t i = 1; i < out->count; i++) {
+        struct rb_io_image_layer l = out->layers[i];
+        uint32_t r = rank[i];
+        size_t j = i;
+        for (; j > 0 && rank[j - 1] > r; j--) {
+            out->layers[j] = out->layers[j - 1];
+            rank[j] = rank[j - 1];
+        }
+        out->layers[j] = l;
+        rank[j] = r;
+    }
+    free(rank);
+    return RB_OK;
+}
+
+void rb_io_image_layers_release(struct rb_io_image_layers *l)
+{
+    if (!l)
+        return;
+    for (size_t i = 0; i < l->count; i++) {
+        free(l->layers[i].name);
+        free(l->layers[i].channels);
+    }
+    free(l->layers);
+    *l = (struct rb_io_image_layers){0};
+}
+
 bool rb_io_image_is_complete(const char *path)
 {
     struct rb_io_image img = {0};

@@ -89,6 +89,47 @@ int rb_io_image_channel(const struct rb_io_image *img, const char *name);
 /* Reads a string attribute of the file's header into out; false when absent. */
 bool rb_io_image_attr(const char *path, const char *name, char *out, size_t size);
 
+/* Every attribute of an image file's header, as text. */
+struct rb_io_image_attrs {
+    size_t count;
+    char **names;  /* count names, owned, in the header's order (OpenEXR's: by name) */
+    char **values; /* count values, owned, formatted as rb_io_image_attr formats them; one of a
+                    * type that is not formatted is its type name in parentheses: "(chlist)" */
+};
+
+/* Reads every attribute of the header of the image at path (OpenEXR's required ones too) into
+ * *out, which is released with rb_io_image_attrs_release, also after a failure. An EXR lists
+ * its whole header; other formats list nothing. Fails with RB_E_IO when path cannot be
+ * opened, RB_E_EXTERNAL when OpenEXR cannot read its header, RB_E_NOMEM; each message names
+ * path. */
+enum rb_status rb_io_image_attrs_read(const char *path, struct rb_io_image_attrs *out,
+                                      struct rb_err *err);
+void rb_io_image_attrs_release(struct rb_io_image_attrs *a);
+
+/* One layer of an image: the channels whose names share the part before their last '.'; the
+ * channels without a '.' are the beauty's. */
+struct rb_io_image_layer {
+    char *name;             /* owned; "beauty" for the channels without a '.' */
+    uint32_t channel_count; /* >= 1 */
+    uint32_t *channels;     /* owned; indices into the image's channels, in its reading order */
+};
+struct rb_io_image_layers {
+    size_t count;
+    struct rb_io_image_layer *layers;
+};
+
+/* Groups img's channels into its layers (borrowing nothing from img): the beauty first, then
+ * the layers raybundle writes in the order of enum rb_layer (direct, indirect, albedo, normal,
+ * depth, motion, ...), then any other in the order of img's channels. Released with
+ * rb_io_image_layers_release, also after a failure, which is RB_E_NOMEM only. */
+enum rb_status rb_io_image_layers_init(struct rb_io_image_layers *out,
+                                       const struct rb_io_image *img, struct rb_err *err);
+void rb_io_image_layers_release(struct rb_io_image_layers *l);
+
+/* A channel's name within its layer, the part after its last '.': "X" for "normal.X", "R" for
+ * "R". Points into name. */
+const char *rb_io_channel_base(const char *name);
+
 /* ---- color ------------------------------------------------------------------------------ */
 
 struct rb_io_color_desc {

@@ -376,70 +376,35 @@ static const char *key_in_scope(const char *path, const char *prefix)
     return strchr(path, '[') ? NULL : path;
 }
 
-static size_t edit_distance(const char *a, const char *b)
-{
-    size_t la = strlen(a), lb = strlen(b), row[64];
-    if (la >= COUNT(row) || lb >= COUNT(row))
-        return SIZE_MAX;
-    for (size_t j = 0; j <= lb; j++)
-        row[j] = j;
-    for (size_t i = 1; i <= la; i++) {
-        size_t diag = row[0];
-        row[0] = i;
-        for (size_t j = 1; j <= lb; j++) {
-            size_t up = row[j];
-            size_t best = diag + (a[i - 1] != b[j - 1]);
-            if (up + 1 < best)
-                best = up + 1;
-            if (row[j - 1] + 1 < best)
-                best = row[j - 1] + 1;
-            row[j] = best;
-            diag = up;
-        }
-    }
-    return row[lb];
-}
-
 /* Writes "; did you mean 'x'?" for the key of mapping prefix nearest to word, or "". */
 static void suggest_key(const char *prefix, const char *word, char *buf, size_t size)
 {
-    size_t n = strlen(prefix), best = 3;
-    char best_name[64] = "";
+    size_t n = strlen(prefix);
+    struct rb_suggest near;
+    rb_suggest_init(&near, word);
     buf[0] = '\0';
     for (size_t i = 0; i < KEY_COUNT; i++) {
         const char *p = keys[i].path;
         if (n && (strncmp(p, prefix, n) || p[n] != '.'))
             continue;
         p += n ? n + 1 : 0;
-        char name[64];
         size_t len = strcspn(p, ".");
-        if (len >= sizeof(name) || memchr(p, '[', len))
-            continue;
-        memcpy(name, p, len);
-        name[len] = '\0';
-        size_t d = edit_distance(word, name);
-        if (d < best) {
-            best = d;
-            memcpy(best_name, name, len + 1);
-        }
+        if (!memchr(p, '[', len))
+            rb_suggest_offer(&near, p, len);
     }
-    if (best_name[0])
-        snprintf(buf, size, "; did you mean '%s'?", best_name);
+    if (near.best[0])
+        snprintf(buf, size, "; did you mean '%s'?", near.best);
 }
 
 static void suggest_name(const struct key *k, const char *word, char *buf, size_t size)
 {
-    size_t best = 3, best_i = 0;
+    struct rb_suggest near;
+    rb_suggest_init(&near, word);
     buf[0] = '\0';
-    for (size_t i = 1; i < k->name_count; i++) {
-        size_t d = edit_distance(word, k->names[i]);
-        if (d < best) {
-            best = d;
-            best_i = i;
-        }
-    }
-    if (best_i)
-        snprintf(buf, size, "; did you mean '%s'?", k->names[best_i]);
+    for (size_t i = 1; i < k->name_count; i++)
+        rb_suggest_offer(&near, k->names[i], strlen(k->names[i]));
+    if (near.best[0])
+        snprintf(buf, size, "; did you mean '%s'?", near.best);
 }
 
 /* "between 16 and 8192", "> 0", "> 0 and < 180"; "" when unbounded. */
@@ -771,8 +736,10 @@ static enum rb_status set_enum(struct ctx *c, const struct key *k, yaml_node_t *
     const char *s = scalar(node);
     if (!s || is_null(node))
         return fail(c, at, RB_E_PARSE, "'%s' expects a name", shown);
+    /* On the command line (--set, --integrator) a name's case does not matter; a job file
+     * spells it as documented. */
     for (int i = 1; i < (int)k->name_count; i++) {
-        if (!strcmp(s, k->names[i])) {
+        if (c->set_index ? !strcasecmp(s, k->names[i]) : !strcmp(s, k->names[i])) {
             memcpy(field(base, k), &i, sizeof(i));
             return RB_OK;
         }
@@ -1150,11 +1117,18 @@ static enum rb_status validate(struct ctx *c)
             l++;
         if (l == RB_LAYER_COUNT) {
             char known[256] = "";
-            for (l = 0; l < RB_LAYER_COUNT; l++)
+            struct rb_suggest near;
+            rb_suggest_init(&near, job->layers[i]);
+            for (l = 0; l < RB_LAYER_COUNT; l++) {
+                const char *name = rb_layer_name((enum rb_layer)l);
                 snprintf(known + strlen(known), sizeof(known) - strlen(known), "%s%s",
-                         l ? ", " : "", rb_layer_name((enum rb_layer)l));
+                         l ? ", " : "", name);
+                rb_suggest_offer(&near, name, strlen(name));
+            }
             return fail(c, mark_of(m, "layers", NULL, &c->root), RB_E_INVALID,
-                        "unknown layer '%s' (%s)", job->layers[i], known);
+                        "unknown layer '%s' (%s)%s%s%s", job->layers[i], known,
+                        near.best[0] ? "; did you mean '" : "", near.best,
+                        near.best[0] ? "'?" : "");
         }
         job->layer_mask |= 1u << l;
     }

@@ -1,7 +1,8 @@
 /* Which frames a run renders: frame lists as render farms write them (OpenJD and Deadline style,
- * "1-3,5,7-20:2"), and the contiguous chunks a farm cuts a run into (--chunk I/N, or a Slurm
- * array task's). A list is a union of stepped ranges, rendered in ascending order with each frame
- * once; nothing here renders or warms up (the frame driver does that for any gap). */
+ * "1-3,5,7-20:2", or "7-20x2" as Deadline writes a step), and the contiguous chunks a farm cuts a
+ * run into (--chunk I/N, or a Slurm array task's). A list is a union of stepped ranges, rendered in
+ * ascending order with each frame once; nothing here renders or warms up (the frame driver does
+ * that for any gap). */
 #include "render/render.h"
 
 #include <limits.h>
@@ -55,7 +56,9 @@ static bool parse_number(const char **p, const char *end, int *out)
     return true;
 }
 
-/* One entry of a list, text[0..len): "A", "A-B" or "A-B:S". */
+#define NOT_A_FRAME "'%.*s' is not a frame (a whole number, 0 or more), a range A-B, A-B:S or A-BxS"
+
+/* One entry of a list, text[0..len): "A", "A-B", or "A-B:S" and "A-BxS" (Deadline's step). */
 static enum rb_status parse_entry(struct rb_render_frames *f, const char *text, size_t len,
                                   struct rb_err *err)
 {
@@ -68,16 +71,14 @@ static enum rb_status parse_entry(struct rb_render_frames *f, const char *text, 
     while (shown > 0 && (first[shown - 1] == ' ' || first[shown - 1] == '\t'))
         shown--;
     if (!parse_number(&p, end, &a))
-        return rb_errf(err, RB_E_INVALID,
-                       "'%.*s' is not a frame (a whole number, 0 or more), a range A-B or A-B:S",
-                       shown, first);
+        return rb_errf(err, RB_E_INVALID, NOT_A_FRAME, shown, first);
     b = a;
     if (p < end && *p == '-') {
         p++;
         if (!parse_number(&p, end, &b))
             return rb_errf(err, RB_E_INVALID, "'%.*s': the range's end is not a whole number",
                            shown, first);
-        if (p < end && *p == ':') {
+        if (p < end && (*p == ':' || *p == 'x')) { /* 'x': Deadline's spelling */
             p++;
             if (!parse_number(&p, end, &step))
                 return rb_errf(err, RB_E_INVALID, "'%.*s': the step is not a whole number", shown,
@@ -89,13 +90,12 @@ static enum rb_status parse_entry(struct rb_render_frames *f, const char *text, 
         if (b < a)
             return rb_errf(err, RB_E_INVALID, "'%.*s': the range ends before it starts", shown,
                            first);
-    } else if (p < end && *p == ':') {
-        return rb_errf(err, RB_E_INVALID, "'%.*s': a step needs a range (A-B:S)", shown, first);
+    } else if (p < end && *p == ':') { /* "5:2"; "0x10" is no frame, not a step */
+        return rb_errf(err, RB_E_INVALID, "'%.*s': a step needs a range (A-B:S or A-BxS)", shown,
+                       first);
     }
     if (p != end)
-        return rb_errf(err, RB_E_INVALID,
-                       "'%.*s' is not a frame (a whole number, 0 or more), a range A-B or A-B:S",
-                       shown, first);
+        return rb_errf(err, RB_E_INVALID, NOT_A_FRAME, shown, first);
     return rb_render_frames_add(f, a, b, step, err);
 }
 

@@ -8,6 +8,7 @@
  * reported by the next call that hands over a frame or flushes. */
 #include "render/render.h"
 
+#include <errno.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -222,8 +223,18 @@ enum rb_render_verdict rb_render_resume_verdict(const struct rb_render *r, const
         !rb_io_image_is_complete(path) || access(timing, R_OK) != 0 ||
         (has_hits && !rb_io_image_is_complete(hits)))
         return RB_RENDER_NEW;
+    /* The sidecar is written last, so it is what says the frame is done: one that does not
+     * parse as a sidecar (a torn or overwritten file) would break report and timing compare
+     * later, so the frame is rendered again. */
+    struct rb_io_timing_file side = {0};
+    bool side_ok = rb_io_timing_read(timing, &side, NULL) == RB_OK;
+    bool side_matches = side_ok && (!side.job_hash[0] || !strcmp(side.job_hash, r->hash)) &&
+                        side.has_hits == has_hits;
+    rb_io_timing_file_release(&side);
+    if (!side_ok)
+        return RB_RENDER_NEW;
     if (!rb_io_image_attr(path, "raybundle:jobHash", recorded, sizeof(recorded)) ||
-        strcmp(recorded, r->hash) != 0)
+        strcmp(recorded, r->hash) != 0 || !side_matches)
         return RB_RENDER_STALE;
     return RB_RENDER_KEEP;
 }
@@ -231,7 +242,8 @@ enum rb_render_verdict rb_render_resume_verdict(const struct rb_render *r, const
 /* ---- writing -------------------------------------------------------------------------------- */
 
 /* The metadata every image of a frame carries (the frame's EXR and its hit ratios): what made
- * it, for which job, which frame. Returns the count (at most FRAME_ATTRS). */
+ * it, for which job, which frame. Returns the count (at most FRAME_ATTRS). The device is the
+ * timing sidecar's, not the EXR's: the same pixels from another driver are the same bytes. */
 #define FRAME_ATTRS 5
 static size_t frame_attrs(const struct rb_render *r, const struct rb_frame_result *f,
                           struct rb_io_attr *out)
@@ -377,6 +389,36 @@ static enum rb_status write_timing(const struct rb_render *r, const char *exr_pa
 
 /* ---- the writer ------------------------------------------------------------------------------ */
 
+/* Removes path if it exists; its absence is fine. */
+static enum rb_status remove_side(const char *path, struct rb_err *err)
+{
+    if (unlink(path) != 0 && errno != ENOENT)
+        return rb_errf(err, RB_E_IO, "cannot remove the old '%s': %s", path, strerror(errno));
+    return RB_OK;
+}
+
+/* A frame's files are all of one render. Before its EXR is written: the old sidecar goes (it
+ * is written last, and says the frame is complete: a render stopped before it leaves none, and
+ * --resume renders the frame again), and so do the hit ratios and the preview this render does
+ * not write (a direct render over a bdpt frame, a render without --preview over one with). */
+static enum rb_status remove_stale_sides(const struct rb_render *r, const struct pending *e,
+                                         struct rb_err *err)
+{
+    char path[4096];
+    enum rb_status st;
+    if ((st = rb_io_sidecar_path(e->path, ".timing.json", path, sizeof(path), err)) ||
+        (st = remove_side(path, err)))
+        return st;
+    if (!e->f.hits && ((st = rb_io_sidecar_path(e->path, ".hits.exr", path, sizeof(path), err)) ||
+                       (st = remove_side(path, err))))
+        return st;
+    if (!r->job->color.preview &&
+        ((st = rb_io_sidecar_path(e->path, ".png", path, sizeof(path), err)) ||
+         (st = remove_side(path, err))))
+        return st;
+    return RB_OK;
+}
+
 static void *writer_main(void *arg)
 {
     struct rb_render *r = arg;
@@ -393,6 +435,7 @@ static void *writer_main(void *arg)
         enum rb_status st = RB_OK;
         if (r->write_st == RB_OK) /* after a failure, nothing more is written */
             (void)((st = rb_io_make_parent_dirs(e->path, &err)) ||
+                   (!r->is_timing_only && (st = remove_stale_sides(r, e, &err))) ||
                    (!r->is_timing_only && (st = write_exr(r, e->path, &e->f, &err))) ||
                    (!r->is_timing_only && e->f.hits &&
                     (st = write_hits(r, e->path, &e->f, &err))) ||

@@ -116,9 +116,9 @@ struct rb_render_frames {
 enum rb_status rb_render_frames_add(struct rb_render_frames *f, int start, int end, int step,
                                     struct rb_err *err);
 /* Adds the ranges of a frame list as render farms write one (OpenJD, Deadline): entries
- * separated by commas, each a frame "A", a range "A-B" (inclusive) or a stepped range "A-B:S";
- * whole numbers >= 0, spaces around them allowed. RB_E_INVALID naming the bad entry; on failure
- * f is released (empty). */
+ * separated by commas, each a frame "A", a range "A-B" (inclusive) or a stepped range "A-B:S"
+ * ("A-BxS" as Deadline writes it); whole numbers >= 0, spaces around them allowed. RB_E_INVALID
+ * naming the bad entry; on failure f is released (empty). */
 enum rb_status rb_render_frames_parse(struct rb_render_frames *f, const char *text,
                                       struct rb_err *err);
 void rb_render_frames_release(struct rb_render_frames *f);

@@ -60,7 +60,8 @@ bad_option "--time-limit applies to the reference integrator only" --time-limit 
 bad_option "--threads applies to the reference integrator only" --threads 2
 rb reference jobs/demo.yaml --integrator direct --out "$T/never" -q
 expect_exit 2 "reference --integrator direct exits 2"
-stderr_has "--integrator is for render" "reference --integrator: explained"
+stderr_has "reference does not take '--integrator': it always renders with the CPU reference" \
+    "reference --integrator: explained"
 # An output directory that cannot be created is found before rendering.
 : >"$T/file"
 rb render jobs/demo.yaml --frames 0 --out "$T/file/sub" -q

@@ -112,4 +112,23 @@ oiiotool --pattern constant:color=0.4,0.3,0.2 16x8 3 -d float -o "$T/scene/sky.e
 rb render "$T/scene/job.yaml" --out "$T/env" --size 64x36 --frames 0 -q --resume
 check "a changed environment map: the frame is rendered again" \
     grep -q "1 rendered, 0 kept, 1 rendered again" "$T/stdout"
+# A frame's files are all of one render. A direct render over bdpt frames with previews removes
+# their hit ratios and previews, which it does not write.
+rb render jobs/demo.yaml --out "$T/sides" --size 64x36 --frames 1-2 -q --integrator bdpt --preview
+expect_exit 0 "bdpt frames with previews render"
+check "bdpt wrote hit ratios and previews" \
+    test -f "$T/sides/frame.0002.hits.exr" -a -f "$T/sides/frame.0002.png"
+rb render jobs/demo.yaml --out "$T/sides" --size 64x36 --frames 1-2 -q --integrator direct
+expect_exit 0 "direct renders over them"
+check "the old hit ratios are gone" sh -c "! ls '$T/sides'/*.hits.exr 2>/dev/null"
+check "the old previews are gone" sh -c "! ls '$T/sides'/*.png 2>/dev/null"
+check "the new frames and sidecars are there" \
+    test -f "$T/sides/frame.0001.exr" -a -f "$T/sides/frame.0002.timing.json"
+# A sidecar that does not parse does not mark its frame done: --resume renders it again.
+echo garbage >"$T/sides/frame.0002.timing.json"
+rb render jobs/demo.yaml --out "$T/sides" --size 64x36 --frames 1-2 -q --integrator direct --resume
+expect_exit 0 "--resume over a garbage sidecar succeeds"
+check "the frame with the garbage sidecar is rendered, the other kept" \
+    grep -q "1 rendered, 1 kept" "$T/stdout"
+check "its sidecar parses again" grep -q '"frame": 2' "$T/sides/frame.0002.timing.json"
 done_testing

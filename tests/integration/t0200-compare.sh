@@ -67,15 +67,42 @@ done
 stdout_has '^max_error  *0 at (0, 0)$' "identical images: max_error 0 at (0, 0)"
 stdout_has '^layer  *beauty (R, G, B)$' "the layer line names the channels"
 
-# 0.75 against 0.5: (a-b)^2 = 1/16, relMSE = (1/16) / (1/4 + 1/100), PSNR = 10 log10(4).
+# 0.75 against 0.5: (a-b)^2 = 1/16, relMSE = (1/16) / (1/4 + 1/100), PSNR = 10 log10(1 / (1/16))
+# with the default peak 1.
 rb compare "$T/c.exr" "$T/a.exr"
 expect_exit 0 "a constant offset exits 0"
-for kv in "rmse 0.25" "relmse 0.240384615" "mae 0.25" "psnr 6.02059991"; do
+for kv in "rmse 0.25" "relmse 0.240384615" "mae 0.25" "psnr 12.0411998"; do
     check "constant offset: ${kv% *} is ${kv#* }" test "$(value "${kv% *}")" = "${kv#* }"
 done
-stdout_has '^psnr  *6.02059991 dB$' "psnr is in dB"
+stdout_has '^psnr  *12.0411998 dB (peak 1)$' "psnr is in dB, with the peak it used"
 rb compare "$T/c.exr" "$T/a.exr" --epsilon 0.75
 check "--epsilon 0.75 gives relmse 1/16" test "$(value relmse)" = "0.0625"
+
+# PSNR's peak is 1 whatever the reference holds: a pixel of 40 in both images (an emitter) does
+# not change it. 765 of 768 values differ by 1/4: PSNR = 10 log10(768 / (765 / 16)).
+mk c_bright --pattern constant:color=0.75,0.75,0.75 16x16 3 --fill:color=40,40,40 1x1+9+9
+mk a_bright --pattern constant:color=0.5,0.5,0.5 16x16 3 --fill:color=40,40,40 1x1+9+9
+rb compare "$T/c_bright.exr" "$T/a_bright.exr" --json
+expect_exit 0 "a bright reference exits 0"
+check "a bright reference: the peak is still 1" grep -qF '"peak": 1,' "$T/stdout"
+check "a bright reference: psnr is 10 log10(768 / (765 / 16))" \
+    grep -qF '"psnr": 12.0581977,' "$T/stdout"
+rb compare "$T/c.exr" "$T/a.exr" --peak 0.5
+expect_exit 0 "--peak 0.5 exits 0"
+check "--peak 0.5: psnr is 10 log10(0.25 / (1/16))" test "$(value psnr)" = 6.02059991
+stdout_has '^psnr  *6.02059991 dB (peak 0.5)$' "--peak 0.5: the peak is printed"
+rb compare "$T/c.exr" "$T/a.exr" --peak 40 --json
+check "--peak 40: JSON has the peak" grep -qF '"peak": 40,' "$T/stdout"
+check "--peak 40: psnr is 10 log10(1600 * 16)" grep -qF '"psnr": 44.0823997,' "$T/stdout"
+rb compare --help
+check "compare --help states the peak 1.0" grep -q 'PSNR is computed with peak 1.0' "$T/stdout"
+check "compare --help lists --peak" grep -q '^  --peak V ' "$T/stdout"
+check "raybundle(1) documents --peak" grep -q '^\.BI \\-\\-peak " V"$' man/raybundle.1
+for bad in 0 -1 x inf; do
+    rb compare "$T/c.exr" "$T/a.exr" --peak "$bad"
+    expect_exit 2 "--peak $bad exits 2"
+    stderr_has "--peak expects a number > 0, got '$bad'" "--peak $bad is explained"
+done
 
 rb compare "$T/out.exr" "$T/a.exr"
 stdout_has '^max_error  *0.5 at (3, 5)$' "one outlier: max_error 0.5 at (3, 5)"
@@ -140,8 +167,22 @@ expect_exit 2 "an unreadable file exits 2"
 stderr_has "'$T/nope.exr'" "the unreadable file is named"
 rb compare "$T/a.exr" "$T/a.exr" --layer direct
 expect_exit 2 "a missing layer exits 2"
-stderr_has "'$T/a.exr' has no layer 'direct'" "the missing layer and file are named"
-stderr_has "direct.R, direct.G, direct.B" "the missing layer's channels are named"
+stderr_has "'$T/a.exr' has no layer 'direct'; its layers: beauty" \
+    "the missing layer and file are named, with the layers the file has"
+# A layer there in part: the missing channel is named.
+mk half_normal --pattern constant:color=0.5,0.5,0.5,1 16x16 4 --chnames R,G,B,normal.X
+rb compare "$T/half_normal.exr" "$T/half_normal.exr" --layer normal
+expect_exit 2 "a layer with a missing channel exits 2"
+stderr_has "'$T/half_normal.exr' has no layer 'normal': channel 'normal.Y' is missing" \
+    "the missing channel is named"
+# Layer names match whatever their case, the file's or the option's.
+mk custom --pattern constant:color=0.5,0.5,0.5,0.25,0.75,1 16x16 6 \
+    --chnames R,G,B,Diffuse.R,Diffuse.G,Diffuse.B
+mk custom2 --pattern constant:color=0.5,0.5,0.5,0.25,0.75,0.5 16x16 6 \
+    --chnames R,G,B,diffuse.R,diffuse.G,diffuse.B
+rb compare "$T/custom2.exr" "$T/custom.exr" --layer DIFFUSE
+expect_exit 0 "--layer DIFFUSE finds Diffuse.* and diffuse.* (exit 0)"
+check "--layer DIFFUSE compares the layer: rmse is sqrt(1/12)" test "$(value rmse)" = 0.288675135
 rb compare "$T/a.exr" "$T/a.exr" --mask "$T/small.exr"
 expect_exit 2 "a mask of another size exits 2"
 rb compare "$T/a.exr" "$T/a.exr" --mask-alpha
@@ -233,6 +274,19 @@ expect_exit 2 "a sequence's --error-image needs a '#' run"
 rb compare "$seq" "$seq" --frames 0-1 --layer direct
 expect_exit 0 "--layer direct on rendered frames exits 0"
 stdout_has '^layer  *direct (direct.R, direct.G, direct.B)$' "--layer direct compares direct.R/G/B"
+rb compare "$T/r/frame.0001.exr" "$T/r/frame.0000.exr" --layer Normal --json
+expect_exit 0 "--layer Normal on rendered frames exits 0"
+check "--layer Normal compares normal.X/Y/Z" \
+    grep -qF '"channels": ["normal.X", "normal.Y", "normal.Z"]' "$T/stdout"
+cp "$T/stdout" "$T/normal-mixed"
+rb compare "$T/r/frame.0001.exr" "$T/r/frame.0000.exr" --layer normal --json
+check "--layer Normal gives --layer normal's numbers" cmp -s "$T/stdout" "$T/normal-mixed"
+check "the normals of the two frames differ (rmse > 0)" \
+    awk -F': ' '/"rmse"/ { sub(/,$/, "", $2); exit !($2 > 0) }' "$T/stdout"
+rb compare "$T/r/frame.0001.exr" "$T/r/frame.0000.exr" --layer foo
+expect_exit 2 "a layer the frame does not have exits 2"
+stderr_has "'$T/r/frame.0001.exr' has no layer 'foo'; its layers: beauty, direct, indirect, albedo, normal, depth, motion" \
+    "the missing layer is named with the frame's layers"
 rb compare "$T/r/frame.0001.exr" "$T/r/frame.0000.exr" --layer depth --mask-alpha
 expect_exit 0 "--layer depth --mask-alpha on rendered frames exits 0"
 geometry=$(value pixels)

@@ -27,9 +27,12 @@ expect_exit 2 "bench --runs 0 exits 2"
 stderr_has "--runs expects 1..99, got '0'" "a bad --runs is explained"
 rb bench jobs/demo.yaml --out "$T/x" --resume
 expect_exit 2 "bench --resume exits 2"
+stderr_has "bench does not take '--resume': it renders every frame afresh and writes no images" \
+    "bench --resume is explained"
 rb render jobs/demo.yaml --runs 3
 expect_exit 2 "render --runs exits 2"
-stderr_has "--runs is an option of 'raybundle bench'" "render --runs is explained"
+stderr_has "render does not take '--runs': only bench renders a job several times" \
+    "render --runs is explained"
 rb timing compare "$T/x"
 expect_exit 2 "timing compare with one set exits 2"
 rb timing frobnicate

@@ -177,8 +177,8 @@ cp -r "$T/seq" "$T/nomotion"
 oiiotool "$T/seq/frame.0002.exr" --ch R,G,B,A,depth.Z -o "$T/nomotion/frame.0002.exr"
 rb flicker "$T/nomotion"
 expect_exit 2 "a frame without the motion layer exits 2"
-stderr_has "'$T/nomotion/frame.0002.exr' has no layer 'motion': channel 'motion.X' is missing" \
-    "the frame without motion is named"
+stderr_has "'$T/nomotion/frame.0002.exr' has no layer 'motion'; its layers: beauty, depth" \
+    "the frame without motion is named, with the layers it has"
 check "nothing went to stdout" test ! -s "$T/stdout"
 
 done_testing

@@ -81,7 +81,8 @@ static void test_identical(void **state)
     assert_int_equal(m.max_error_x, 0);
     assert_int_equal(m.max_error_y, 0);
     assert_int_equal(m.nonfinite_count, 0);
-    assert_double_equal(m.peak, 0.6f, 1e-7); /* the largest value, 0.1 * 6 */
+    assert_double_equal(m.max_b, 0.6f, 1e-7); /* the largest value, 0.1 * 6 */
+    assert_double_equal(m.peak, 1.0, 0);      /* PSNR's peak is RB_ANALYSIS_PEAK, not max_b */
 }
 
 static void test_constant_offset(void **state)
@@ -95,8 +96,8 @@ static void test_constant_offset(void **state)
     assert_double_equal(m.mae, 0.25, 1e-12);
     assert_double_equal(m.mse, 0.0625, 1e-12);
     assert_double_equal(m.relmse, 0.0625 / (0.25 + 0.01), 1e-12);
-    assert_double_equal(m.peak, 0.5, 0);
-    assert_double_equal(m.psnr, 10.0 * log10(0.25 / 0.0625), 1e-9);
+    assert_double_equal(m.peak, 1.0, 0);
+    assert_double_equal(m.psnr, 10.0 * log10(1.0 / 0.0625), 1e-9);
     assert_double_equal(m.max_error, 0.25, 0);
     /* Every value ties: the first pixel in row order is reported. */
     assert_int_equal(m.max_error_x, 0);
@@ -133,20 +134,21 @@ static void test_mask(void **state)
     a[10] = 5.0f;
     mask[10] = 0;
     mask[11] = 0;
-    b[20] = 100.0f; /* a masked-out reference value does not set the peak */
+    b[20] = 100.0f; /* a masked-out reference value is not the largest compared */
     a[20] = 100.0f;
     mask[20] = 0;
     struct rb_analysis_metrics m = run(a, b, 1, mask, 0.0);
     assert_int_equal(m.pixel_count, N - 3);
     assert_true(m.rmse == 0.0 && m.max_error == 0.0 && isinf(m.psnr));
-    assert_double_equal(m.peak, 1.0, 0);
+    assert_double_equal(m.max_b, 1.0, 0);
     /* Without the mask the outlier counts. */
     m = run(a, b, 1, NULL, 0.0);
     assert_int_equal(m.pixel_count, N);
     assert_double_equal(m.max_error, 4.0, 0);
     assert_int_equal(m.max_error_x, 10 % W);
     assert_int_equal(m.max_error_y, 10 / W);
-    assert_double_equal(m.peak, 100.0, 0);
+    assert_double_equal(m.max_b, 100.0, 0);
+    assert_double_equal(m.peak, 1.0, 0); /* the peak does not follow the reference */
 }
 
 static void test_mask_and(void **state)
@@ -175,7 +177,7 @@ static void test_relmse_epsilon(void **state)
     assert_double_equal(m.relmse, d2 / 1e-2, 1e-12);
     m = run(a, b, 1, NULL, 1.0);
     assert_double_equal(m.relmse, d2, 1e-12);
-    /* A black reference: the peak falls back to 1. */
+    /* A black reference: the peak is still 1. */
     assert_double_equal(m.peak, 1.0, 0);
     assert_double_equal(m.psnr, 10.0 * log10(1.0 / d2), 1e-9);
 }
@@ -190,6 +192,49 @@ static void test_negative_reference_peak(void **state)
     assert_double_equal(m.max_b, -3.0, 0);
     assert_double_equal(m.peak, 1.0, 0);
     assert_double_equal(m.psnr, 0.0, 1e-12);
+}
+
+/* PSNR's peak: 1 unless the desc gives one, whatever the reference holds; kept over frames;
+ * a negative or infinite one is refused. */
+static void test_peak(void **state)
+{
+    (void)state;
+    float a[N * 3], b[N * 3];
+    fill(b, N * 3, 0.5f);
+    fill(a, N * 3, 0.75f);
+    b[7] = 38.0f; /* an emitter's value in the reference */
+    a[7] = 38.0f;
+    struct rb_analysis_compare_desc d = {
+        .width_px = W, .height_px = H, .channel_count = 3, .a = a, .b = b};
+    struct rb_analysis_metrics m;
+    struct rb_err err = RB_ERR_INIT;
+    double mse = 0.0625 * (N * 3 - 1) / (N * 3);
+    assert_int_equal(rb_analysis_compare(&d, &m, &err), RB_OK);
+    assert_double_equal(m.mse, mse, 1e-12);
+    assert_double_equal(m.max_b, 38.0, 0);
+    assert_double_equal(m.peak, RB_ANALYSIS_PEAK, 0);
+    assert_double_equal(m.psnr, 10.0 * log10(1.0 / mse), 1e-9);
+    d.peak = 38.0;
+    assert_int_equal(rb_analysis_compare(&d, &m, &err), RB_OK);
+    assert_double_equal(m.peak, 38.0, 0);
+    assert_double_equal(m.psnr, 10.0 * log10(38.0 * 38.0 / mse), 1e-9);
+
+    /* Two frames with peak 2 add up with peak 2. */
+    d.peak = 2.0;
+    struct rb_analysis_metrics total = {0};
+    assert_int_equal(rb_analysis_compare(&d, &m, &err), RB_OK);
+    rb_analysis_metrics_add(&total, &m, 0);
+    rb_analysis_metrics_add(&total, &m, 1);
+    assert_double_equal(total.peak, 2.0, 0);
+    assert_double_equal(total.psnr, 10.0 * log10(4.0 / mse), 1e-9);
+
+    d.peak = -1.0;
+    assert_int_equal(rb_analysis_compare(&d, &m, &err), RB_E_INVALID);
+    assert_non_null(strstr(err.msg, "peak -1"));
+    d.peak = INFINITY;
+    assert_int_equal(rb_analysis_compare(&d, &m, &err), RB_E_INVALID);
+    d.peak = NAN;
+    assert_int_equal(rb_analysis_compare(&d, &m, &err), RB_E_INVALID);
 }
 
 static void test_nonfinite(void **state)
@@ -480,6 +525,18 @@ static void test_layer_resolve(void **state)
     assert_string_equal(l.channels[0], "hits.R");
     assert_int_equal(rb_analysis_layer_resolve("direct.R", &l, &err), RB_E_INVALID);
     assert_non_null(strstr(err.msg, "'direct.R'"));
+    /* the renderer's layers in any case, spelt as it writes them; others as asked */
+    assert_int_equal(rb_analysis_layer_resolve("Normal", &l, &err), RB_OK);
+    assert_string_equal(l.name, "normal");
+    assert_int_equal(l.channel_count, 3);
+    assert_string_equal(l.channels[0], "normal.X");
+    assert_int_equal(rb_analysis_layer_resolve("DEPTH", &l, &err), RB_OK);
+    assert_string_equal(l.channels[0], "depth.Z");
+    assert_int_equal(rb_analysis_layer_resolve("Beauty", &l, &err), RB_OK);
+    assert_string_equal(l.name, "beauty");
+    assert_string_equal(l.channels[0], "R");
+    assert_int_equal(rb_analysis_layer_resolve("Hits", &l, &err), RB_OK);
+    assert_string_equal(l.channels[0], "Hits.R");
 }
 
 static void test_layer_extract(void **state)
@@ -506,8 +563,46 @@ static void test_layer_extract(void **state)
     assert_int_equal(rb_analysis_layer_resolve("albedo", &l, &err), RB_OK);
     assert_int_equal(rb_analysis_layer_extract(&l, &img, "x.exr", &out, &err), RB_E_INVALID);
     assert_null(out);
-    assert_string_equal(err.msg, "'x.exr' has no layer 'albedo': channel 'albedo.R' is missing "
-                                 "(the layer is albedo.R, albedo.G, albedo.B)");
+    /* A missing layer is named with the layers the file has. */
+    assert_string_equal(err.msg, "'x.exr' has no layer 'albedo'; its layers: beauty, depth");
+}
+
+/* A layer's name matches the file's whatever the case (the exact name first); a layer that is
+ * there in part is named with its missing channel. */
+static void test_layer_extract_case(void **state)
+{
+    (void)state;
+    char *names[] = {"R",        "Diffuse.R", "Diffuse.G", "Diffuse.B",
+                     "NORMAL.X", "normal.X",  "motion.X",  "Custom.b"};
+    float px[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+    struct rb_io_image img = {
+        .width_px = 1, .height_px = 1, .channel_count = 8, .channel_names = names, .pixels = px};
+    struct rb_analysis_layer l;
+    struct rb_err err = RB_ERR_INIT;
+    float *out = NULL;
+
+    assert_int_equal(rb_analysis_layer_resolve("diffuse", &l, &err), RB_OK);
+    assert_int_equal(rb_analysis_layer_extract(&l, &img, "x.exr", &out, &err), RB_OK);
+    assert_true(out[0] == 2.0f && out[1] == 3.0f && out[2] == 4.0f);
+    free(out);
+    out = NULL;
+    /* "normal.X" is there as it is spelt: it wins over "NORMAL.X"; Y and Z are not there. */
+    assert_int_equal(rb_analysis_layer_resolve("Normal", &l, &err), RB_OK);
+    assert_int_equal(rb_analysis_layer_extract(&l, &img, "x.exr", &out, &err), RB_E_INVALID);
+    assert_null(out);
+    assert_string_equal(err.msg, "'x.exr' has no layer 'normal': channel 'normal.Y' is missing "
+                                 "(the layer is normal.X, normal.Y, normal.Z)");
+    /* The channel's own name is not matched without case: "Custom.b" is not "custom.B". */
+    assert_int_equal(rb_analysis_layer_resolve("custom", &l, &err), RB_OK);
+    assert_int_equal(rb_analysis_layer_extract(&l, &img, "x.exr", &out, &err), RB_E_INVALID);
+    assert_string_equal(err.msg, "'x.exr' has no layer 'custom': channel 'custom.R' is missing "
+                                 "(the layer is custom.R, custom.G, custom.B)");
+    /* The layers are listed as the file spells them: the beauty, raybundle's in their order,
+     * then the others in the order of the channels. */
+    assert_int_equal(rb_analysis_layer_resolve("foo", &l, &err), RB_OK);
+    assert_int_equal(rb_analysis_layer_extract(&l, &img, "x.exr", &out, &err), RB_E_INVALID);
+    assert_string_equal(err.msg, "'x.exr' has no layer 'foo'; its layers: beauty, normal, "
+                                 "motion, Diffuse, NORMAL, Custom");
 }
 
 /* ---- error image ------------------------------------------------------------------------ */
@@ -555,6 +650,7 @@ int main(void)
         cmocka_unit_test(test_mask_and),
         cmocka_unit_test(test_relmse_epsilon),
         cmocka_unit_test(test_negative_reference_peak),
+        cmocka_unit_test(test_peak),
         cmocka_unit_test(test_nonfinite),
         cmocka_unit_test(test_error_buffers),
         cmocka_unit_test(test_invalid),
@@ -564,6 +660,7 @@ int main(void)
         cmocka_unit_test(test_edges_large_radius),
         cmocka_unit_test(test_layer_resolve),
         cmocka_unit_test(test_layer_extract),
+        cmocka_unit_test(test_layer_extract_case),
         cmocka_unit_test(test_error_image),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);

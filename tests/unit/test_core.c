@@ -176,13 +176,79 @@ static void test_layers(void **state)
     assert_null(rb_layer_channel(RB_LAYER_COUNT, 0));
 }
 
+/* The oracle is the edit distance written out by hand for each pair. */
+static void test_edit_distance(void **state)
+{
+    (void)state;
+    struct {
+        const char *a, *b;
+        size_t d;
+    } pairs[] = {
+        {"render", "render", 0}, {"rendr", "render", 1},    {"preveiw", "preview", 1},
+        {"bdtp", "bdpt", 1},     {"BDPT", "bdpt", 0},       {"", "abc", 3},
+        {"abc", "", 3},          {"kitten", "sitting", 3},  {"ca", "abc", 3},
+        {"nmae", "name", 1},     {"lights[]", "lights", 2},
+    };
+    for (size_t i = 0; i < sizeof(pairs) / sizeof(pairs[0]); i++) {
+        size_t d = rb_edit_distance(pairs[i].a, strlen(pairs[i].a), pairs[i].b, strlen(pairs[i].b));
+        if (d != pairs[i].d)
+            fail_msg("'%s' to '%s': %zu edits, want %zu", pairs[i].a, pairs[i].b, d, pairs[i].d);
+    }
+    char longer[80];
+    memset(longer, 'a', sizeof(longer));
+    assert_int_equal(rb_edit_distance(longer, 65, "a", 1), SIZE_MAX);
+    /* The length given is what counts, not the terminator. */
+    assert_int_equal(rb_edit_distance("frames.start", 6, "frames", 6), 0);
+}
+
+static const char *nearest(const char *word, const char *const *names, size_t count)
+{
+    static struct rb_suggest s;
+    rb_suggest_init(&s, word);
+    for (size_t i = 0; i < count; i++)
+        rb_suggest_offer(&s, names[i], strlen(names[i]));
+    return s.best;
+}
+
+static void test_suggest(void **state)
+{
+    (void)state;
+    const char *const commands[] = {"render", "reference", "compare", "bench",
+                                    "timing", "flicker",   "report",  "info"};
+    size_t n = sizeof(commands) / sizeof(commands[0]);
+    assert_string_equal(nearest("rendr", commands, n), "render");
+    assert_string_equal(nearest("refrence", commands, n), "reference");
+    assert_string_equal(nearest("Render", commands, n), "render");
+    assert_string_equal(nearest("ifno", commands, n), "info");
+    assert_string_equal(nearest("frobnicate", commands, n), "");
+    assert_string_equal(nearest("", commands, n), "");
+    /* Two edits at most, and a third of the longer length at most: 'set' is not 'out'. */
+    const char *const options[] = {"out", "output", "set", "size", "spp"};
+    assert_string_equal(nearest("set", options + 0, 1), "");
+    assert_string_equal(nearest("outptu", options, 5), "output");
+    assert_string_equal(nearest("sze", options, 5), "size");
+    assert_string_equal(nearest("xyz", options, 5), "");
+    /* The nearest wins, and the first of equals. */
+    const char *const names[] = {"direct", "bdpt", "hybrid", "reference"};
+    assert_string_equal(nearest("bdtp", names, 4), "bdpt");
+    const char *const equals[] = {"abce", "abcf"};
+    assert_string_equal(nearest("abcd", equals, 2), "abce");
+    /* A name too long for best is not offered. */
+    char name[60];
+    memset(name, 'n', sizeof(name) - 1);
+    name[sizeof(name) - 1] = '\0';
+    const char *const too_long[] = {name};
+    assert_string_equal(nearest(name, too_long, 1), "");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_errf_and_prefix), cmocka_unit_test(test_status_names),
         cmocka_unit_test(test_strings),         cmocka_unit_test(test_hash),
         cmocka_unit_test(test_read_file),       cmocka_unit_test(test_log),
-        cmocka_unit_test(test_layers),
+        cmocka_unit_test(test_layers),          cmocka_unit_test(test_edit_distance),
+        cmocka_unit_test(test_suggest),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -57,6 +57,11 @@ static void test_lists(void **state)
     expect_list("0-12:4,2-6:2", (int[]){0, 2, 4, 6, 8, 12}, 6);
     expect_list(" 2 - 4 , 8 ", (int[]){2, 3, 4, 8}, 4);
     expect_list("5-5:3", (int[]){5}, 1);
+    /* Deadline writes the step as "x": the same frames as ':'. */
+    expect_list("1-10x2", (int[]){1, 3, 5, 7, 9}, 5);
+    expect_list("1-10:2", (int[]){1, 3, 5, 7, 9}, 5);
+    expect_list("0-12x4,2-6:2", (int[]){0, 2, 4, 6, 8, 12}, 6);
+    expect_list(" 3 - 9 x 3 ", (int[]){3, 6, 9}, 3);
     expect_list("2147483646-2147483647", (int[]){2147483646, 2147483647}, 2);
 }
 
@@ -88,6 +93,10 @@ static void test_bad_lists(void **state)
     expect_bad_list("1-10:0", "'1-10:0': the step must be 1 or more");
     expect_bad_list("1-10:", "'1-10:': the step is not a whole number");
     expect_bad_list("5:2", "'5:2': a step needs a range");
+    expect_bad_list("1-10x0", "'1-10x0': the step must be 1 or more");
+    expect_bad_list("1-10x", "'1-10x': the step is not a whole number");
+    expect_bad_list("1-10X2", "'1-10X2' is not a frame");
+    expect_bad_list("1-10x2x3", "'1-10x2x3' is not a frame");
     expect_bad_list("2147483648", "'2147483648' is not a frame");
 }
 
@@ -106,7 +115,10 @@ static void random_list(uint64_t *rng, char *text, size_t size)
         switch ((r >> 24) % 3) {
         case 0: len += snprintf(text + len, size - len, "%s%d", sep, a); break;
         case 1: len += snprintf(text + len, size - len, "%s%d-%d", sep, a, b); break;
-        default: len += snprintf(text + len, size - len, "%s%d-%d:%d", sep, a, b, step); break;
+        default: /* the step after ':' or, as Deadline writes it, 'x' */
+            len += snprintf(text + len, size - len, "%s%d-%d%c%d", sep, a, b,
+                            (*rng >> 20) & 1 ? 'x' : ':', step);
+            break;
         }
     }
 }
@@ -117,7 +129,7 @@ static void oracle(const char *text, bool *in)
     memset(in, 0, UNIVERSE * sizeof(*in));
     for (const char *p = text; p; p = strchr(p, ',') ? strchr(p, ',') + 1 : NULL) {
         int a, b, step = 1;
-        int got = sscanf(p, "%d-%d:%d", &a, &b, &step);
+        int got = sscanf(p, "%d-%d%*[:x]%d", &a, &b, &step);
         if (got == 1)
             b = a;
         for (int f = a; f <= b; f++)

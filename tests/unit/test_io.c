@@ -373,6 +373,104 @@ static void test_exr_roundtrip(void **state)
     free(buf);
 }
 
+/* The value of the named attribute in a, or NULL. */
+static const char *attr_value(const struct rb_io_image_attrs *a, const char *name)
+{
+    for (size_t i = 0; i < a->count; i++)
+        if (!strcmp(a->names[i], name))
+            return a->values[i];
+    return NULL;
+}
+
+/* Every header attribute listed as text, OpenEXR's required ones too; an image without a
+ * header to list lists nothing; a missing file fails naming it. */
+static void test_image_attrs(void **state)
+{
+    (void)state;
+    fill_layers();
+    struct rb_err err = RB_ERR_INIT;
+    const char *path = tpath("attrs.exr");
+    if (write_test_exr(path, &err))
+        fail_msg("%s", err.msg);
+    struct rb_io_image_attrs a = {0};
+    assert_int_equal(rb_io_image_attrs_read(path, &a, &err), RB_OK);
+    assert_string_equal(attr_value(&a, "raybundle/integrator"), "bdpt");
+    assert_string_equal(attr_value(&a, "raybundle/frame"), "12");
+    assert_string_equal(attr_value(&a, "raybundle/time_s"), "0.5");
+    assert_string_equal(attr_value(&a, "software"), "raybundle " RB_VERSION);
+    assert_string_equal(attr_value(&a, "worldToCamera"),
+                        "1, 0.5, 0, 0, 0, 1, 0.25, 0, 0, 0, 1, 0, -3.5, 2, 7.25, 1");
+    assert_string_equal(attr_value(&a, "compression"), "zip");
+    assert_string_equal(attr_value(&a, "lineOrder"), "increasing y");
+    assert_string_equal(attr_value(&a, "dataWindow"), "0, 0, 6, 4");
+    assert_string_equal(attr_value(&a, "channels"), "(chlist)");
+    assert_null(attr_value(&a, "raybundle/missing"));
+    /* In the header's order: by name. */
+    for (size_t i = 1; i < a.count; i++)
+        assert_true(strcmp(a.names[i - 1], a.names[i]) < 0);
+    rb_io_image_attrs_release(&a);
+    assert_int_equal(a.count, 0);
+    assert_null(a.names);
+
+    const char *png = tpath("attrs.png");
+    assert_int_equal(
+        rb_io_preview_write(png, 2, 2,
+                            (const float[16]){0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1},
+                            &(struct rb_io_color_desc){.config = CONFIG}, &err),
+        RB_OK);
+    assert_int_equal(rb_io_image_attrs_read(png, &a, &err), RB_OK);
+    assert_int_equal(a.count, 0);
+    rb_io_image_attrs_release(&a);
+
+    const char *missing = tpath("no-such.exr");
+    assert_int_equal(rb_io_image_attrs_read(missing, &a, &err), RB_E_IO);
+    assert_non_null(strstr(err.msg, missing));
+    rb_io_image_attrs_release(&a);
+    /* A file that starts as an EXR but is not one fails, naming it. */
+    const char *torn = tpath("torn.exr");
+    spit(torn, "\x76\x2f\x31\x01\x02\x00\x00\x00", 8);
+    assert_int_equal(rb_io_image_attrs_read(torn, &a, &err), RB_E_EXTERNAL);
+    assert_non_null(strstr(err.msg, torn));
+    rb_io_image_attrs_release(&a);
+}
+
+/* Channels grouped into layers: the beauty, then raybundle's layers in their order, then the
+ * others in the order of the channels; a channel's base name. */
+static void test_image_layers(void **state)
+{
+    (void)state;
+    char *names[] = {"R",        "G",        "B",     "A",      "depth.Z",  "zeta.X",
+                     "direct.R", "direct.G", "a.b.Y", "zeta.Y", "direct.B", "normal.X"};
+    struct rb_io_image img = {
+        .width_px = 1, .height_px = 1, .channel_count = 12, .channel_names = names};
+    struct rb_io_image_layers l = {0};
+    struct rb_err err = RB_ERR_INIT;
+    assert_int_equal(rb_io_image_layers_init(&l, &img, &err), RB_OK);
+    assert_int_equal(l.count, 6);
+    const char *want_names[] = {"beauty", "direct", "normal", "depth", "zeta", "a.b"};
+    const uint32_t want_counts[] = {4, 3, 1, 1, 2, 1};
+    for (size_t i = 0; i < 6; i++) {
+        assert_string_equal(l.layers[i].name, want_names[i]);
+        assert_int_equal(l.layers[i].channel_count, want_counts[i]);
+    }
+    assert_int_equal(l.layers[1].channels[0], 6);
+    assert_int_equal(l.layers[1].channels[2], 10);
+    assert_int_equal(l.layers[4].channels[1], 9);
+    assert_string_equal(rb_io_channel_base(names[l.layers[5].channels[0]]), "Y");
+    assert_string_equal(rb_io_channel_base("R"), "R");
+    assert_string_equal(rb_io_channel_base("normal.X"), "X");
+    rb_io_image_layers_release(&l);
+    assert_int_equal(l.count, 0);
+    /* No channel without a '.': no beauty. */
+    img.channel_names = names + 4;
+    img.channel_count = 2;
+    assert_int_equal(rb_io_image_layers_init(&l, &img, &err), RB_OK);
+    assert_int_equal(l.count, 2);
+    assert_string_equal(l.layers[0].name, "depth");
+    assert_string_equal(l.layers[1].name, "zeta");
+    rb_io_image_layers_release(&l);
+}
+
 static void test_exr_deterministic(void **state)
 {
     (void)state;
@@ -745,7 +843,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_frame_path),       cmocka_unit_test(test_sidecar_path),
         cmocka_unit_test(test_make_parent_dirs), cmocka_unit_test(test_write_atomic),
-        cmocka_unit_test(test_exr_roundtrip),    cmocka_unit_test(test_exr_deterministic),
+        cmocka_unit_test(test_exr_roundtrip),    cmocka_unit_test(test_image_attrs),
+        cmocka_unit_test(test_image_layers),     cmocka_unit_test(test_exr_deterministic),
         cmocka_unit_test(test_exr_errors),       cmocka_unit_test(test_is_complete),
         cmocka_unit_test(test_preview),          cmocka_unit_test(test_preview_errors),
         cmocka_unit_test(test_default_config),   cmocka_unit_test(test_timing_json),

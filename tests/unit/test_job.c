@@ -446,6 +446,17 @@ static void test_overrides(void **state)
     assert_null(job->lights);
     rb_job_destroy(job);
 
+    /* On the command line a name's case does not matter; in a job file it does. */
+    struct rb_job_override upper[] = {{"integrator.name", "BDPT", NULL},
+                                      {"lights", "[{type: Spot}]", NULL}};
+    job = must_parse(text, upper, 2);
+    assert_int_equal(job->integrator.name, RB_INTEGRATOR_BDPT);
+    assert_int_equal(job->lights[0].type, RB_LIGHT_SPOT);
+    rb_job_destroy(job);
+    expect_error("scene: empty.gltf\nintegrator: {name: BDPT}\n", NULL, 0, RB_E_INVALID,
+                 "job.yaml:2:20: 'integrator.name' must be one of direct, bdpt, hybrid, "
+                 "reference, not 'BDPT'; did you mean 'bdpt'?");
+
     /* A --set can supply a key the file lacks. */
     struct rb_job_override scene[] = {{"scene", "empty.gltf", NULL}};
     job = must_parse("resolution: [8, 8]\n", scene, 1);
@@ -680,6 +691,10 @@ static void test_adaptive_layers(void **state)
                  RB_E_INVALID,
                  "--integrator 'bdpt': layer 'samples' is written by the hybrid and reference "
                  "integrators only, and this job renders with 'bdpt'");
+    expect_error("scene: empty.gltf\nlayers: [indirect_difuse]\n", NULL, 0, RB_E_INVALID,
+                 "job.yaml:2:9: unknown layer 'indirect_difuse' (direct, indirect, albedo, normal, "
+                 "depth, motion, indirect_diffuse, indirect_specular, samples, tiles); did you "
+                 "mean 'indirect_diffuse'?");
 }
 
 static void test_man_page_covers_keys(void **state)
