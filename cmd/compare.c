@@ -10,30 +10,43 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 
 #include "analysis/analysis.h"
+#include "analysis/flip.h"
 #include "io/io.h"
 
 #define MAX_FRAMES 1000000
 
 struct options {
     const char *a, *b;
-    const char *frames, *layer, *mask, *error_image;
-    bool mask_alpha, json;
+    const char *frames, *layer, *mask, *error_image, *flip_map;
+    bool mask_alpha, json, no_flip;
     uint32_t exclude_edges_px;
     double epsilon;
     double peak; /* --peak: PSNR's peak; 0 means RB_ANALYSIS_PEAK */
-    bool has_max_relmse, has_max_rmse;
-    double max_relmse, max_rmse;
+    bool has_max_relmse, has_max_rmse, has_max_flip;
+    double max_relmse, max_rmse, max_flip;
     /* Derived: */
     bool is_sequence;
     int first, last;
 };
 
+/* FLIP of one frame: LDR-FLIP for two PNGs, HDR-FLIP otherwise (scene-linear EXRs), pooled over
+ * the compared pixels (the mask's). */
+struct flip_result {
+    bool has;    /* computed: an RGB layer, not --no-flip */
+    bool is_hdr; /* HDR-FLIP, with exposures */
+    struct rb_analysis_flip_stats stats;
+    struct rb_analysis_flip_exposures exposures;
+    char why[400]; /* without it on a colour layer: why it could not be computed */
+};
+
 struct frame_result {
     int frame;
     struct rb_analysis_metrics m;
+    struct flip_result flip;
 };
 
 static void usage(FILE *f)
@@ -44,7 +57,9 @@ static void usage(FILE *f)
         "\n"
         "Compares the test image A against the reference B (EXR or any image OpenImageIO\n"
         "reads), or two frame sequences given as patterns with a '#' run plus --frames.\n"
-        "Prints RMSE, relative MSE, mean absolute error, PSNR and the largest error.\n"
+        "Prints RMSE, relative MSE, mean absolute error, PSNR, the largest error and, for\n"
+        "an RGB layer, FLIP (HDR-FLIP for EXRs, LDR-FLIP for two PNGs; the mean, the\n"
+        "weighted median and the largest per-pixel error, 0 to 1).\n"
         "PSNR is computed with peak 1.0, i.e. for display-referred values, unless --peak\n"
         "gives another.\n"
         "\n"
@@ -57,8 +72,12 @@ static void usage(FILE *f)
         "  --epsilon E          relMSE = (a-b)^2 / (b^2 + E), averaged (default 0.01)\n"
         "  --peak V             PSNR = 10 log10(V^2 / MSE) with V > 0 (default 1.0)\n"
         "  --error-image PATH   write |a-b| as R,G,B and relMSE as relmse.Y ('#' per frame)\n"
+        "  --flip-map PATH      write the per-pixel FLIP error as an EXR, flip.Y ('#' per\n"
+        "                       frame)\n"
+        "  --no-flip            do not compute FLIP\n"
         "  --max-relmse X       exit 1 when the relative MSE exceeds X\n"
         "  --max-rmse X         exit 1 when the RMSE exceeds X\n"
+        "  --max-flip X         exit 1 when the mean FLIP exceeds X\n"
         "  --json               print one JSON object instead of text\n"
         "  -h, --help           show this help\n"
         "\n"
@@ -113,6 +132,9 @@ static int parse_options(int argc, char **argv, struct options *o)
         O_ERROR_IMAGE,
         O_MAX_RELMSE,
         O_MAX_RMSE,
+        O_MAX_FLIP,
+        O_FLIP_MAP,
+        O_NO_FLIP,
         O_JSON
     };
     static const struct option opts[] = {
@@ -126,6 +148,9 @@ static int parse_options(int argc, char **argv, struct options *o)
         {"error-image", required_argument, NULL, O_ERROR_IMAGE},
         {"max-relmse", required_argument, NULL, O_MAX_RELMSE},
         {"max-rmse", required_argument, NULL, O_MAX_RMSE},
+        {"max-flip", required_argument, NULL, O_MAX_FLIP},
+        {"flip-map", required_argument, NULL, O_FLIP_MAP},
+        {"no-flip", no_argument, NULL, O_NO_FLIP},
         {"json", no_argument, NULL, O_JSON},
         {"help", no_argument, NULL, 'h'},
         {0},
@@ -168,6 +193,13 @@ static int parse_options(int argc, char **argv, struct options *o)
                 return -1;
             o->has_max_rmse = true;
             break;
+        case O_MAX_FLIP:
+            if (parse_number("--max-flip", optarg, 0.0, false, &o->max_flip))
+                return -1;
+            o->has_max_flip = true;
+            break;
+        case O_FLIP_MAP: o->flip_map = optarg; break;
+        case O_NO_FLIP: o->no_flip = true; break;
         case O_JSON: o->json = true; break;
         case 'h': usage(stdout); return 1;
         default: return -1; /* reported */
@@ -199,6 +231,14 @@ static int parse_options(int argc, char **argv, struct options *o)
         return -1;
     if (o->is_sequence && o->error_image && !strchr(o->error_image, '#')) {
         cmd_error("--error-image for a sequence needs a '#' run in '%s'", o->error_image);
+        return -1;
+    }
+    if (o->is_sequence && o->flip_map && !strchr(o->flip_map, '#')) {
+        cmd_error("--flip-map for a sequence needs a '#' run in '%s'", o->flip_map);
+        return -1;
+    }
+    if (o->no_flip && (o->flip_map || o->has_max_flip)) {
+        cmd_error("--no-flip contradicts %s", o->flip_map ? "--flip-map" : "--max-flip");
         return -1;
     }
     return 0;
@@ -277,9 +317,68 @@ static enum rb_status need_channel(const struct rb_io_image *img, const char *pa
 }
 
 /* Compares one pair of files into *out and writes its error image when asked. */
+/* Whether the layer is colour: three channels R, G, B (or NAME.R, NAME.G, NAME.B). FLIP is a
+ * difference of colours; a normal or a motion vector has none. */
+static bool is_color_layer(const struct rb_analysis_layer *layer)
+{
+    static const char rgb[3] = {'R', 'G', 'B'};
+    if (layer->channel_count != 3)
+        return false;
+    for (uint32_t c = 0; c < 3; c++) {
+        const char *name = layer->channels[c], *dot = strrchr(name, '.');
+        const char *base = dot ? dot + 1 : name;
+        if (base[0] != rgb[c] || base[1])
+            return false;
+    }
+    return true;
+}
+
+/* Whether path names a PNG (by its extension, any case). */
+static bool is_png(const char *path)
+{
+    size_t n = strlen(path);
+    return n >= 4 && !strcasecmp(path + n - 4, ".png");
+}
+
+/* FLIP of a and b (RGB, w x h) into *out, pooled over the pixels mask keeps, and its map to
+ * map_path when asked. */
+static enum rb_status compare_flip(const float *a, const float *b, uint32_t w, uint32_t h,
+                                   const uint8_t *mask, bool is_hdr, const char *map_path,
+                                   struct flip_result *out, struct rb_err *err)
+{
+    size_t n = (size_t)w * h, kept = 0;
+    float *map = malloc(n * sizeof(float));
+    enum rb_status st;
+    if (!map)
+        return rb_errf(err, RB_E_NOMEM, "out of memory for a %ux%u FLIP map", w, h);
+    struct flip_result r = {.has = true, .is_hdr = is_hdr};
+    st = is_hdr ? rb_analysis_flip_hdr(a, b, w, h, NULL, map, NULL, &r.exposures, err)
+                : rb_analysis_flip_ldr(a, b, w, h, NULL, map, NULL, err);
+    if (!st && map_path) {
+        static const char *const y[1] = {"Y"};
+        const struct rb_io_layer layer = {
+            .name = "flip", .channel_count = 1, .channel_names = y, .pixels = map};
+        const struct rb_io_layer layers[1] = {layer};
+        if (!(st = rb_io_make_parent_dirs(map_path, err)))
+            st = rb_io_exr_write(map_path, w, h, layers, 1, NULL, 0, err);
+    }
+    /* Pooled over the compared pixels: the map compacted to them (the pooled values do not
+     * depend on where a pixel is; the largest error's pixel is taken from the map). */
+    for (size_t i = 0; !st && i < n; i++)
+        if (mask[i])
+            map[kept++] = map[i];
+    if (!st && kept)
+        st = rb_analysis_flip_pool(map, (uint32_t)kept, 1, &r.stats, err);
+    free(map);
+    if (!st && kept)
+        *out = r;
+    return st;
+}
+
 static enum rb_status compare_frame(const struct options *o, const struct rb_analysis_layer *layer,
                                     const char *path_a, const char *path_b, const char *mask_path,
-                                    const char *error_path, struct rb_analysis_metrics *out,
+                                    const char *error_path, const char *flip_path,
+                                    struct rb_analysis_metrics *out, struct flip_result *flip,
                                     struct rb_err *err)
 {
     struct rb_io_image ia = {0}, ib = {0};
@@ -356,6 +455,27 @@ static enum rb_status compare_frame(const struct options *o, const struct rb_ana
                        (st = rb_analysis_error_write(error_path, w, h, layer->channel_count,
                                                      abs_error, rel_error, err))))
         goto out;
+    if (!o->no_flip && is_color_layer(layer)) {
+        /* FLIP is asked for (a map, a bound) or only shown: where it cannot be computed (NaN
+         * pixels, a reference too dark to choose HDR exposures from: a median luminance of 0),
+         * the first fails and the second prints why in its place. */
+        bool is_asked = flip_path || o->has_max_flip;
+        struct rb_err flip_err = RB_ERR_INIT;
+        if (out->nonfinite_count)
+            rb_errf(&flip_err, RB_E_INVALID,
+                    "FLIP needs finite pixels; '%s' or '%s' has NaN or "
+                    "infinite ones",
+                    path_a, path_b);
+        else
+            (void)compare_flip(a, b, w, h, mask, !(is_png(path_a) && is_png(path_b)), flip_path,
+                               flip, &flip_err);
+        if (flip_err.status == RB_E_NOMEM || (flip_err.status && is_asked)) {
+            st = rb_errf(err, flip_err.status, "%s", flip_err.msg);
+            goto out;
+        }
+        if (flip_err.status) /* said in the output, beside the other figures */
+            rb_strlcpy(flip->why, flip_err.msg, sizeof(flip->why));
+    }
 out:
     free(rel_error);
     free(abs_error);
@@ -397,9 +517,27 @@ static void json_metrics(FILE *f, const struct rb_analysis_metrics *m, const cha
     fprintf(f, "\"nonfinite_pixels\": %" PRIu64, m->nonfinite_count);
 }
 
+/* FLIP as a JSON member ("flip": null when not computed). */
+static void json_flip(FILE *f, const struct flip_result *r, const char *sep)
+{
+    if (!r->has) {
+        fprintf(f, ",%s\"flip\": null", sep);
+        return;
+    }
+    fprintf(f,
+            ",%s\"flip\": {\"kind\": \"%s\", \"mean\": %.9g, \"weighted_median\": %.9g, "
+            "\"q1\": %.9g, \"q3\": %.9g, \"max\": %.9g",
+            sep, r->is_hdr ? "hdr" : "ldr", r->stats.mean, r->stats.weighted_median,
+            r->stats.weighted_q1, r->stats.weighted_q3, r->stats.max);
+    if (r->is_hdr)
+        fprintf(f, ", \"exposures\": {\"start\": %.9g, \"stop\": %.9g, \"count\": %u}",
+                r->exposures.start, r->exposures.stop, r->exposures.count);
+    fprintf(f, "}");
+}
+
 static void print_json(const struct options *o, const struct rb_analysis_layer *layer,
-                       const struct rb_analysis_metrics *total, const struct frame_result *frames,
-                       size_t frame_count)
+                       const struct rb_analysis_metrics *total, const struct flip_result *flip,
+                       const struct frame_result *frames, size_t frame_count)
 {
     printf("{\n  \"a\": ");
     json_string(stdout, o->a);
@@ -414,6 +552,12 @@ static void print_json(const struct options *o, const struct rb_analysis_layer *
     }
     printf("],\n  \"epsilon\": %.9g,\n  ", o->epsilon > 0.0 ? o->epsilon : RB_ANALYSIS_EPSILON);
     json_metrics(stdout, total, "\n  ");
+    if (!o->is_sequence)
+        json_flip(stdout, flip, "\n  ");
+    else if (flip->has)
+        printf(",\n  \"flip\": {\"mean\": %.9g, \"max\": %.9g}", flip->stats.mean, flip->stats.max);
+    else
+        printf(",\n  \"flip\": null");
     if (o->is_sequence) {
         printf(",\n  \"max_error_frame\": %d,\n  \"frames\": [", total->max_error_frame);
         for (size_t i = 0; i < frame_count; i++) {
@@ -428,6 +572,7 @@ static void print_json(const struct options *o, const struct rb_analysis_layer *
             json_string(stdout, b);
             printf(", ");
             json_metrics(stdout, &frames[i].m, " ");
+            json_flip(stdout, &frames[i].flip, " ");
             printf("}");
         }
         printf("\n  ]");
@@ -436,8 +581,8 @@ static void print_json(const struct options *o, const struct rb_analysis_layer *
 }
 
 static void print_text(const struct options *o, const struct rb_analysis_layer *layer,
-                       const struct rb_analysis_metrics *m, const struct frame_result *frames,
-                       size_t frame_count)
+                       const struct rb_analysis_metrics *m, const struct flip_result *flip,
+                       const struct frame_result *frames, size_t frame_count)
 {
     printf("%-10s %s\n%-10s %s\n%-10s %s (", "a", o->a, "b", o->b, "layer", layer->name);
     for (uint32_t c = 0; c < layer->channel_count; c++)
@@ -445,8 +590,8 @@ static void print_text(const struct options *o, const struct rb_analysis_layer *
     printf(")\n");
     if (o->is_sequence) {
         printf("%-10s %d-%d\n\n", "frames", o->first, o->last);
-        printf("%8s %10s %16s %16s %16s %16s %16s %12s\n", "frame", "pixels", "rmse", "relmse",
-               "mae", "psnr", "max_error", "at");
+        printf("%8s %10s %16s %16s %16s %16s %16s %12s %12s\n", "frame", "pixels", "rmse", "relmse",
+               "mae", "psnr", "max_error", "at", "flip");
         for (size_t i = 0; i < frame_count; i++) {
             const struct rb_analysis_metrics *f = &frames[i].m;
             char psnr[32], at[32];
@@ -455,8 +600,12 @@ static void print_text(const struct options *o, const struct rb_analysis_layer *
             else
                 snprintf(psnr, sizeof(psnr), "%.9g", f->psnr);
             snprintf(at, sizeof(at), "(%u, %u)", f->max_error_x, f->max_error_y);
-            printf("%8d %10" PRIu64 " %16.9g %16.9g %16.9g %16s %16.9g %12s\n", frames[i].frame,
-                   f->pixel_count, f->rmse, f->relmse, f->mae, psnr, f->max_error, at);
+            char fl[32] = "-";
+            if (frames[i].flip.has)
+                snprintf(fl, sizeof(fl), "%.6g", frames[i].flip.stats.mean);
+            printf("%8d %10" PRIu64 " %16.9g %16.9g %16.9g %16s %16.9g %12s %12s\n",
+                   frames[i].frame, f->pixel_count, f->rmse, f->relmse, f->mae, psnr, f->max_error,
+                   at, fl);
         }
         printf("\n");
     }
@@ -472,6 +621,19 @@ static void print_text(const struct options *o, const struct rb_analysis_layer *
     if (o->is_sequence)
         printf(" in frame %d", m->max_error_frame);
     printf("\n");
+    if (flip->has && o->is_sequence)
+        printf("%-10s %.6g (mean of the frames' means), max %.6g\n", "flip", flip->stats.mean,
+               flip->stats.max);
+    else if (flip->has && flip->is_hdr)
+        printf("%-10s %.6g (HDR-FLIP, %u exposures from %.4g to %.4g; weighted median %.6g, "
+               "max %.6g)\n",
+               "flip", flip->stats.mean, flip->exposures.count, flip->exposures.start,
+               flip->exposures.stop, flip->stats.weighted_median, flip->stats.max);
+    else if (flip->has)
+        printf("%-10s %.6g (LDR-FLIP; weighted median %.6g, max %.6g)\n", "flip", flip->stats.mean,
+               flip->stats.weighted_median, flip->stats.max);
+    else if (flip->why[0])
+        printf("%-10s none: %s\n", "flip", flip->why);
     if (m->nonfinite_count)
         printf("%-10s %" PRIu64 " pixels skipped\n", "nonfinite", m->nonfinite_count);
 }
@@ -488,6 +650,7 @@ int cmd_compare(int argc, char **argv)
     struct rb_err err = RB_ERR_INIT;
     struct rb_analysis_layer layer;
     struct rb_analysis_metrics total = {0};
+    struct flip_result flip = {0}; /* a sequence's: the mean of the frames' means, the max */
     struct frame_result *frames = NULL;
     size_t frame_count = (size_t)(o.last - o.first) + 1;
     enum rb_status st;
@@ -495,6 +658,12 @@ int cmd_compare(int argc, char **argv)
 
     if ((st = rb_analysis_layer_resolve(o.layer, &layer, &err))) {
         cmd_error("%s", err.msg);
+        rc = RB_EXIT_USAGE;
+        goto out;
+    }
+    if ((o.flip_map || o.has_max_flip) && !is_color_layer(&layer)) {
+        cmd_error("%s needs FLIP, which needs an RGB layer (not '%s')",
+                  o.flip_map ? "--flip-map" : "--max-flip", layer.name);
         rc = RB_EXIT_USAGE;
         goto out;
     }
@@ -510,17 +679,18 @@ int cmd_compare(int argc, char **argv)
     }
     for (size_t i = 0; i < frame_count; i++) {
         struct frame_result *r = &frames[i];
-        char a[4096], b[4096], mask[4096], error[4096];
+        char a[4096], b[4096], mask[4096], error[4096], fmap[4096];
         r->frame = o.first + (int)i;
         if (frame_path(&o, o.a, r->frame, a, sizeof(a)) ||
             frame_path(&o, o.b, r->frame, b, sizeof(b)) ||
             (o.mask && frame_path(&o, o.mask, r->frame, mask, sizeof(mask))) ||
-            (o.error_image && frame_path(&o, o.error_image, r->frame, error, sizeof(error)))) {
+            (o.error_image && frame_path(&o, o.error_image, r->frame, error, sizeof(error))) ||
+            (o.flip_map && frame_path(&o, o.flip_map, r->frame, fmap, sizeof(fmap)))) {
             rc = RB_EXIT_USAGE;
             goto out;
         }
         st = compare_frame(&o, &layer, a, b, o.mask ? mask : NULL, o.error_image ? error : NULL,
-                           &r->m, &err);
+                           o.flip_map ? fmap : NULL, &r->m, &r->flip, &err);
         if (st) {
             if (o.is_sequence)
                 cmd_error("frame %d: %s", r->frame, err.msg);
@@ -531,6 +701,20 @@ int cmd_compare(int argc, char **argv)
         }
         rb_analysis_metrics_add(&total, &r->m, r->frame);
     }
+    /* FLIP over the frames: the mean of their means and the largest, when every frame has it. */
+    flip = frames[0].flip;
+    for (size_t i = 1; flip.has && i < frame_count; i++) {
+        flip.has = frames[i].flip.has;
+        flip.stats.mean += frames[i].flip.stats.mean;
+        if (frames[i].flip.stats.max > flip.stats.max)
+            flip.stats.max = frames[i].flip.stats.max;
+    }
+    if (flip.has)
+        flip.stats.mean /= (double)frame_count;
+    for (size_t i = 0; !flip.has && !flip.why[0] && i < frame_count; i++)
+        if (frames[i].flip.why[0])
+            snprintf(flip.why, sizeof(flip.why), "frame %d: %.360s", frames[i].frame,
+                     frames[i].flip.why);
     if (total.pixel_count == 0) {
         cmd_error("no pixel is left to compare (%" PRIu64 " skipped as NaN or infinite); check "
                   "--mask, --mask-alpha and --exclude-edges",
@@ -540,9 +724,9 @@ int cmd_compare(int argc, char **argv)
     }
 
     if (o.json)
-        print_json(&o, &layer, &total, frames, frame_count);
+        print_json(&o, &layer, &total, &flip, frames, frame_count);
     else
-        print_text(&o, &layer, &total, frames, frame_count);
+        print_text(&o, &layer, &total, &flip, frames, frame_count);
     fflush(stdout);
 
     /* A threshold exceeded is the "failed" status (1); so is any NaN when a threshold is set,
@@ -563,6 +747,13 @@ int cmd_compare(int argc, char **argv)
     }
     if (o.has_max_rmse && total.rmse > o.max_rmse) {
         cmd_error("rmse %.9g exceeds --max-rmse %.9g", total.rmse, o.max_rmse);
+        rc = RB_EXIT_FAILED;
+    }
+    if (o.has_max_flip && !flip.has) {
+        cmd_error("--max-flip: no pixel was left to compute FLIP on");
+        rc = RB_EXIT_FAILED;
+    } else if (o.has_max_flip && flip.stats.mean > o.max_flip) {
+        cmd_error("flip %.9g exceeds --max-flip %.9g", flip.stats.mean, o.max_flip);
         rc = RB_EXIT_FAILED;
     }
 out:

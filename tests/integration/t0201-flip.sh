@@ -1,0 +1,81 @@
+#!/bin/sh
+# raybundle compare's FLIP: on the image pairs NVIDIA's reference tool (FLIP 1.6) was run on
+# (../shared/flip, beside the scenes; skipped without them), the mean that compare prints is the
+# tool's within 1%, HDR-FLIP for EXRs and LDR-FLIP for PNGs; --max-flip fails above its bound,
+# --flip-map writes the per-pixel error, --no-flip leaves it out, and layers that are not RGB
+# have none.
+. tests/integration/lib.sh
+
+FLIP=${RB_FLIP:-$(dirname "$SCENES")/flip}
+
+# within A B: A is within 1% of B.
+within() {
+    awk -v a="$1" -v b="$2" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a != "" && d <= 0.01 * b) }'
+}
+json_flip_mean() {
+    python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["flip"]["mean"])' "$T/stdout"
+}
+
+if [ -f "$FLIP/expected.tsv" ]; then
+    tail -n +2 "$FLIP/expected.tsv" >"$T/expected.tsv"
+    while IFS='	' read -r ref test kind mean rest; do
+        rb compare "$FLIP/$test" "$FLIP/$ref" --json
+        expect_exit 0 "compare $test $ref exits 0"
+        got=$(json_flip_mean)
+        if within "$got" "$mean"; then
+            ok "$kind-FLIP of $test against $ref: $got, the tool's $mean within 1%"
+        else
+            not_ok "$kind-FLIP of $test against $ref: $got, the tool's $mean within 1%"
+        fi
+        check "the JSON says $kind" grep -q "\"kind\": \"$kind\"" "$T/stdout"
+    done <"$T/expected.tsv"
+    a="$FLIP/lambert_b2_h1_4096_s1001.exr" b="$FLIP/lambert_b2_ref_8192.exr"
+    rb compare "$a" "$b"
+    check "the text output has a flip line" grep -q '^flip  *0\.00689.* (HDR-FLIP, 13 exposures' \
+        "$T/stdout"
+    rb compare "$a" "$b" --max-flip 0.001
+    expect_exit 1 "--max-flip 0.001 fails a mean FLIP of 0.0069"
+    check "and says so" grep -q 'exceeds --max-flip' "$T/stderr"
+    rb compare "$a" "$b" --max-flip 0.01
+    expect_exit 0 "--max-flip 0.01 passes it"
+    rb compare "$a" "$b" --flip-map "$T/map/flip.exr"
+    expect_exit 0 "--flip-map exits 0"
+    rb info "$T/map/flip.exr"
+    check "--flip-map writes a 320x180 map" grep -qx 'size: 320x180' "$T/stdout"
+    check "with one channel, flip.Y" grep -qx 'layers: flip (Y)' "$T/stdout"
+    rb compare "$a" "$b" --no-flip
+    check "--no-flip prints no flip line" sh -c "! grep -q '^flip' '$T/stdout'"
+else
+    skip "FLIP against the reference tool's figures" "no $FLIP/expected.tsv"
+fi
+
+# Rendered frames: FLIP of a frame against itself is 0; a layer that is not RGB has none.
+rb render jobs/demo.yaml --frames 1-2 --size 64x36 --out "$T/r" -q
+expect_exit 0 "two small frames render"
+rb compare "$T/r/frame.0001.exr" "$T/r/frame.0001.exr" --json
+check "a frame against itself: FLIP 0" test "$(json_flip_mean)" = 0
+rb compare "$T/r/frame.####.exr" "$T/r/frame.####.exr" --frames 1-2
+check "a sequence prints the mean of its frames' FLIP" grep -q '^flip  *0 (mean of the frames' \
+    "$T/stdout"
+rb compare "$T/r/frame.0001.exr" "$T/r/frame.0002.exr" --layer depth --json
+check "the depth layer has no FLIP" grep -q '"flip": null' "$T/stdout"
+rb compare "$T/r/frame.0001.exr" "$T/r/frame.0002.exr" --layer normal --json
+expect_exit 0 "the normal layer compares"
+check "the normal layer (three channels, not colour) has no FLIP" grep -q '"flip": null' \
+    "$T/stdout"
+rb compare "$T/r/frame.0001.exr" "$T/r/frame.0002.exr" --layer depth --max-flip 0.1
+expect_exit 2 "--max-flip on the depth layer is bad usage"
+check "it says FLIP needs an RGB layer" grep -q 'needs an RGB layer' "$T/stderr"
+
+# A reference mostly black (median luminance 0): HDR-FLIP cannot choose exposures from it, as the
+# reference tool cannot. Shown, it says why in its place; asked for, it fails.
+oiiotool --pattern constant:color=0,0,0 64x36 3 --box:color=1,1,1:fill=1 0,0,7,7 -d float \
+    -o "$T/dark.exr" >/dev/null 2>&1
+rb compare "$T/dark.exr" "$T/dark.exr"
+expect_exit 0 "a dark reference compares"
+check "its flip line says why there is none" grep -q '^flip  *none: .*median 0' "$T/stdout"
+check "and nothing goes to stderr" test ! -s "$T/stderr"
+rb compare "$T/dark.exr" "$T/dark.exr" --max-flip 0.1
+expect_exit 2 "--max-flip against it fails"
+check "naming the reason" grep -q 'median 0' "$T/stderr"
+done_testing
