@@ -21,6 +21,7 @@
 #include "bindings_shared.h"
 #include "shared.h"
 #include "bdpt_shared.h"
+#include "encode.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -85,7 +86,7 @@ void main()
         return;
     vec4 p = imageLoad(gb_position, px);
     vec3 s0 = vec3(0.0), s1 = vec3(0.0), s2 = vec3(0.0), s3 = vec3(0.0);
-    float count = 0.0, count_d = 0.0, taps = 0.0;
+    float count = 0.0, count_d = 0.0;
     int h = int(pc.split.w), rd = int(pc.stops.z), n = int(pc.split.x), sampled = int(pc.stops.w);
     // Per sub-image (class), the sum of its pixels' weights: the tent's for indirect light, the
     // count of those in the inner box for direct light.
@@ -98,8 +99,8 @@ void main()
     // The kernel's rows as bit masks of the pixels on the surface (at most 2 x 16 - 1 wide:
     // the job's largest radius), so the second sweep reads no G-buffer again.
     uint rows[2 * RB_BDPT_MAX_FILTER - 1];
+    vec3 nrm = imageLoad(gb_normal, px).xyz;
     if (p.w > 0.0) {
-        vec3 nrm = imageLoad(gb_normal, px).xyz;
         for (int dy = 1 - h; dy < h; dy++) {
             uint bits = 0u;
             for (int dx = 1 - h; dx < h; dx++) {
@@ -131,16 +132,17 @@ void main()
                 float wi = tent(dx, dy, h) / per[c];
                 s2 += imageLoad(i2, q).rgb * wi;
                 s3 += imageLoad(i3, q).rgb * wi;
-                taps += 1.0;
             }
     }
     float inv = count > 0.0 ? 1.0 / count : 0.0, inv_d = count_d > 0.0 ? 1.0 / count_d : 0.0;
     // The outputs are the temporal cache's: its depth z_c, and the slope of 1 / z across the
     // image (affine in the image for a plane seen in perspective), with which reconstruct moves
-    // z_c from this sample to where a pixel's surface lands.
+    // z_c from this sample to where a pixel's surface lands; and its normal, with which
+    // reconstruct tells two surfaces apart where depth cannot (a room's concave corner, where a
+    // wall and the ceiling meet at the same depth).
     vec2 slope = p.w > 0.0 ? inverse_depth_slope(px, size, 1.0 / p.w) : vec2(0.0);
     imageStore(o0, px, vec4(s0 * inv_d, p.w));
     imageStore(o1, px, vec4(s1 * inv_d, slope.x));
-    imageStore(o2, px, vec4(s2 * inv, taps));
+    imageStore(o2, px, vec4(s2 * inv, p.w > 0.0 ? rb_normal_pack(nrm) : 0.0));
     imageStore(o3, px, vec4(s3 * inv, slope.y));
 }

@@ -833,6 +833,7 @@ static void write_history(const struct rb_integrator *it, struct bdpt *d, int f)
     h->info[3] = wrap(f, l);
     h->params[0] = 2.0f * job->hit_variance;
     h->params[1] = job->hit_epsilon;
+    h->params[2] = job->filter_normal;
 }
 
 /* Frame f's camera, for the frames that reproject into it while its cache lives. */
@@ -879,13 +880,14 @@ static void record_reconstruct(struct rb_integrator *it, struct bdpt *d, VkComma
 {
     struct rb_frame *frame = &it->frame;
     struct rb_bdpt_frame *b = &d->b;
-    struct rb_gpu_access uses[4 + 2 * RB_BDPT_LIGHT_COUNT] = {
+    struct rb_gpu_access uses[5 + 2 * RB_BDPT_LIGHT_COUNT] = {
         {.buffer = &b->history, .use = RB_GPU_COMPUTE_UNIFORM},
         {.image = &frame->gbuffer[RB_GB_POSITION], .use = RB_GPU_COMPUTE_READ},
+        {.image = &frame->gbuffer[RB_GB_NORMAL], .use = RB_GPU_COMPUTE_READ},
         {.image = &b->reproject, .use = RB_GPU_COMPUTE_READ},
         {.buffer = &b->hits, .use = RB_GPU_COMPUTE_WRITE},
     };
-    uint32_t count = 4;
+    uint32_t count = 5;
     for (int i = 0; i < RB_BDPT_LIGHT_COUNT; i++) {
         uses[count++] =
             (struct rb_gpu_access){.image = &b->filtered[i], .use = RB_GPU_COMPUTE_READ};

@@ -209,7 +209,9 @@ static const struct key keys[] = {
       "bdpt: distance from a pixel's tangent plane, relative to its depth, at which the filter "
       "stops"),
     K("integrator.bdpt.filter_normal", KT_FLOAT, JOB(integrator.bdpt.filter_normal), -1, 1, "0.9",
-      0, "bdpt: cosine between normals below which the filter stops"),
+      0,
+      "bdpt: cosine between normals below which the filter stops and a cache sample is not the "
+      "pixel's surface"),
     K("integrator.bdpt.clamp", KT_FLOAT, JOB(integrator.bdpt.clamp), 0, NOHI, "100", 0,
       "bdpt: with strategies vpl, bound on the geometry term of the VPLs' connections, in units "
       "of one over the scene diagonal squared; 0: no clamp"),

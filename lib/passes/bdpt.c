@@ -153,6 +153,7 @@ static const struct rb_pass_binding reconstruct_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_OUT + 2, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_OUT + 3, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_HITS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_RECONSTRUCT_GB_NORMAL, STORAGE_IMAGE),
 };
 _Static_assert(COUNT(reconstruct_bindings) == RB_BIND_BDPT_RECONSTRUCT_COUNT,
                "reconstruct bindings");
@@ -454,6 +455,8 @@ void rb_pass_bdpt_reconstruct_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_RECONSTRUCT_HISTORY, &b->history);
     rb_pass_bind_image(&bind, RB_BIND_BDPT_RECONSTRUCT_GB_POSITION,
                        frame->gbuffer[RB_GB_POSITION].view, VK_NULL_HANDLE);
+    rb_pass_bind_image(&bind, RB_BIND_BDPT_RECONSTRUCT_GB_NORMAL, frame->gbuffer[RB_GB_NORMAL].view,
+                       VK_NULL_HANDLE);
     rb_pass_bind_image(&bind, RB_BIND_BDPT_RECONSTRUCT_REPROJECT, b->reproject.view,
                        VK_NULL_HANDLE);
     for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++) {

@@ -129,7 +129,9 @@ struct rb_gpu_bdpt_history {
                                              * centres, in pixels; zw unused */
     RB_UVEC4(info);  /* l; which ages hold a cache (bit a); the hit test (RB_BDPT_HIT_*); the
                       * slot this frame writes, f mod l */
-    RB_VEC4(params); /* 2 sigma^2 of the gaussian test; epsilon of the binary one; unused x2 */
+    RB_VEC4(params); /* 2 sigma^2 of the gaussian test; epsilon of the binary one; the
+                      * least cosine between a pixel's normal and a cache sample's (the
+                      * filter's normal threshold); unused */
 };
 
 /* info.z: the hit test, as enum rb_bdpt_hit_test. */

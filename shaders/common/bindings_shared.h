@@ -155,7 +155,8 @@
 #define RB_BIND_BDPT_RECONSTRUCT_CACHE 3 /* RB_BDPT_LIGHT_COUNT arrays, a layer per slot */
 #define RB_BIND_BDPT_RECONSTRUCT_OUT 7   /* written: RB_BDPT_LIGHT_COUNT images */
 #define RB_BIND_BDPT_RECONSTRUCT_HITS 11 /* written: a float per pixel, host-visible */
-#define RB_BIND_BDPT_RECONSTRUCT_COUNT 12
+#define RB_BIND_BDPT_RECONSTRUCT_GB_NORMAL 12
+#define RB_BIND_BDPT_RECONSTRUCT_COUNT 13
 
 /* brdf_table.comp (tests/unit/test_brdf_parity.c) */
 #define RB_BIND_BRDF_TABLE_IN 0

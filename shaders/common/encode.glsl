@@ -20,4 +20,19 @@ vec3 rb_oct_decode(vec2 p)
     return normalize(n);
 }
 
+// A unit vector in one float, exactly: its octahedral coordinates at 12 bits each, an integer
+// below 2^24 (every one of which a 32-bit float holds), so no NaN or denormal pattern can arise
+// and any image format of 32-bit floats keeps it.
+float rb_normal_pack(vec3 n)
+{
+    uvec2 q = uvec2(round((rb_oct_encode(n) * 0.5 + 0.5) * 4095.0));
+    return float(q.x * 4096u + q.y);
+}
+
+vec3 rb_normal_unpack(float v)
+{
+    uint u = uint(v);
+    return rb_oct_decode(vec2(u >> 12u, u & 4095u) / 4095.0 * 2.0 - 1.0);
+}
+
 #endif
