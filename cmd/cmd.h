@@ -50,6 +50,15 @@ extern bool cmd_bar_open;
 /* Ends an open progress line with a newline, so what is printed next starts a line. */
 void cmd_end_bar(void);
 
+/* The width to fit lines to on fd: $COLUMNS when set to a number, else the terminal's (fd being
+ * one), else 80. */
+int cmd_terminal_width(int fd);
+
+/* path as shown to a person: without "." parts and "dir/.." pairs ("jobs/../out/x" is
+ * "out/x"), when that names the same file; else path as it is (a missing file, a symbolic link
+ * on the way). */
+void cmd_display_path(const char *path, char *out, size_t size);
+
 /* Prints "raybundle: error: <msg>" to stderr (after ending an open progress line). */
 void cmd_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 /* The last message cmd_error printed (cut to fit), for a farm's failure line. */

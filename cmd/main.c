@@ -6,6 +6,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/ioctl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "job/job.h"
 
@@ -25,7 +28,7 @@ static const struct command commands[] = {
     {"report", cmd_report,
      "write an HTML report of a rendered sequence: timing, error, thumbnails"},
     {"info", cmd_info, "list Vulkan devices, drivers and the features raybundle uses"},
-    {"help", cmd_help, "show this list, or 'help job' for every job-file key"},
+    {"help", cmd_help, "show this list, or 'help job [PREFIX]' for the job-file keys"},
 };
 
 bool cmd_bar_open;
@@ -60,6 +63,64 @@ void cmd_usage_error(const char *command, const char *fmt, ...)
     vsnprintf(msg, sizeof(msg), fmt, ap);
     va_end(ap);
     cmd_error("%s; see 'raybundle %s%s--help'", msg, command, command[0] ? " " : "");
+}
+
+int cmd_terminal_width(int fd)
+{
+    /* COLUMNS first, as git's term_columns does: the user's word, and a test's. */
+    const char *env = getenv("COLUMNS");
+    char *end;
+    long n = env && *env ? strtol(env, &end, 10) : 0;
+    if (n > 0 && n < 10000 && !*end)
+        return (int)n;
+    struct winsize ws;
+    if (isatty(fd) && ioctl(fd, TIOCGWINSZ, &ws) == 0 && ws.ws_col > 0)
+        return ws.ws_col;
+    return 80;
+}
+
+void cmd_display_path(const char *path, char *out, size_t size)
+{
+    /* Lexically: "." parts go, and "dir/.." goes unless dir is itself "..". */
+    char buf[4096];
+    size_t len = 0, n = strlen(path);
+    bool is_abs = path[0] == '/';
+    if (n >= sizeof(buf) || n >= size) {
+        snprintf(out, size, "%s", path);
+        return;
+    }
+    for (const char *p = path; *p;) {
+        while (*p == '/')
+            p++;
+        size_t part = strcspn(p, "/");
+        if (!part)
+            break;
+        bool is_dot = part == 1 && p[0] == '.';
+        bool is_up = part == 2 && p[0] == '.' && p[1] == '.';
+        /* the last part kept is "..", which ".." cannot cancel */
+        bool last_up = len >= 2 && buf[len - 1] == '.' && buf[len - 2] == '.' &&
+                       (len == 2 || buf[len - 3] == '/');
+        if (is_dot || (is_up && is_abs && !len)) {
+            /* "." is here, and "/.." is "/" */
+        } else if (is_up && len && !last_up) {
+            while (len && buf[len - 1] != '/')
+                len--;
+            if (len)
+                len--; /* and the slash before the part dropped */
+        } else {
+            if (len)
+                buf[len++] = '/';
+            memcpy(buf + len, p, part);
+            len += part;
+        }
+        p += part;
+    }
+    buf[len] = '\0';
+    snprintf(out, size, "%s%s", is_abs ? "/" : "", len || is_abs ? buf : ".");
+    /* Only when both name the same file: through a symbolic link, "dir/.." is not ".". */
+    struct stat a, b;
+    if (stat(path, &a) != 0 || stat(out, &b) != 0 || a.st_dev != b.st_dev || a.st_ino != b.st_ino)
+        snprintf(out, size, "%s", path);
 }
 
 /* The long option of opts named name[0..len), exactly or as its only abbreviation; NULL when
@@ -179,11 +240,39 @@ static void usage(FILE *f)
                "raybundle-job(5).\n");
 }
 
+/* raybundle help job [PREFIX]: the keys whose path starts with PREFIX. */
+static int help_job(const char *prefix)
+{
+    if (prefix && rb_job_print_keys(stdout, prefix, cmd_terminal_width(STDOUT_FILENO)))
+        return RB_EXIT_OK;
+    if (!prefix) {
+        rb_job_print_keys(stdout, NULL, cmd_terminal_width(STDOUT_FILENO));
+        return RB_EXIT_OK;
+    }
+    /* Nothing matched: the nearest key, or section (the path before a dot), to the prefix. */
+    struct rb_suggest near;
+    rb_suggest_init(&near, prefix);
+    for (size_t i = 0; i < rb_job_key_count(); i++) {
+        const char *path = rb_job_key_path(i);
+        for (const char *dot = strchr(path, '.'); dot; dot = strchr(dot + 1, '.'))
+            rb_suggest_offer(&near, path, (size_t)(dot - path));
+        rb_suggest_offer(&near, path, strlen(path));
+    }
+    if (near.best[0])
+        cmd_error("no job key starts with '%s'; did you mean '%s'?", prefix, near.best);
+    else
+        cmd_error("no job key starts with '%s' ('raybundle help job' lists them all)", prefix);
+    return RB_EXIT_USAGE;
+}
+
 int cmd_help(int argc, char **argv)
 {
     if (argc > 1 && strcmp(argv[1], "job") == 0) {
-        rb_job_print_keys(stdout);
-        return RB_EXIT_OK;
+        if (argc > 3) {
+            cmd_error("help job takes one key prefix, and '%s' is a second", argv[3]);
+            return RB_EXIT_USAGE;
+        }
+        return help_job(argc > 2 ? argv[2] : NULL);
     }
     if (argc > 1) {
         cmd_error("no help topic '%s' (try 'raybundle help' or 'raybundle help job')", argv[1]);

@@ -63,7 +63,7 @@ struct options {
     /* Text behind the options that are sugar for --set (--frames, --size, ...). */
     char frames_start[32], frames_end[32], size_value[48];
     char frames_origin[64], size_origin[64], integrator_origin[64], spp_origin[64],
-        time_limit_origin[64];
+        time_limit_origin[64], view_origin[64];
 };
 
 /* The commands of this file, as bits of a set. */
@@ -86,7 +86,8 @@ enum {
     O_STRICT,
     O_RUNS,
     O_CHUNK,
-    O_PROGRESS
+    O_PROGRESS,
+    O_VIEW
 };
 
 /* One option of render, reference and bench. The one table that getopt, each command's --help
@@ -136,6 +137,10 @@ static const struct flag flags[] = {
      NULL},
     {"preview", no_argument, O_PREVIEW, FOR_RENDER | FOR_REFERENCE, NULL,
      "also write NAME.####.png through OpenColorIO",
+     "it renders every frame afresh and writes no images"},
+    {"view", required_argument, O_VIEW, FOR_RENDER | FOR_REFERENCE, "NAME",
+     "the OpenColorIO view of --preview's PNGs (color.view);\n"
+     "default: the display's first ('ACES 1.0 - SDR Video')",
      "it renders every frame afresh and writes no images"},
     {"device", required_argument, O_DEVICE, FOR_RENDER | FOR_BENCH, "NAME|INDEX",
      "pick a Vulkan device (default: lavapipe)", "it renders on the CPU, with no Vulkan device"},
@@ -342,6 +347,10 @@ static int parse_options(int argc, char **argv, struct options *o)
         }
         case O_RESUME: o->resume = true; break;
         case O_PREVIEW: o->preview = true; break;
+        case O_VIEW:
+            snprintf(o->view_origin, sizeof(o->view_origin), "--view '%.48s'", optarg);
+            bad = add_override(o, "color.view", optarg, o->view_origin);
+            break;
         case O_DEVICE: o->device = optarg; break;
         case O_VALIDATE: o->validate = true; break;
         case O_SPP:
@@ -457,8 +466,10 @@ static int exit_for(enum rb_status st, bool rendering)
 /* What progress reports need to know, also inside a reference frame. */
 struct progress_state {
     bool is_tty, is_openjd, is_quiet;
+    bool is_saved; /* a "Saved: PATH" line on stdout for each frame written */
     int done, total;
     int percent; /* the last openjd_progress printed */
+    int width;   /* the terminal's columns, for the bar */
 };
 
 /* One of OpenJD's stdout messages ("openjd_progress: 40"), flushed, so a farm's agent reading a
@@ -467,11 +478,13 @@ static void openjd(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 static void openjd(const char *fmt, ...)
 {
     va_list ap;
+    flockfile(stdout); /* one line, whole, beside the writer thread's "Saved:" lines */
     va_start(ap, fmt);
     vprintf(fmt, ap);
     va_end(ap);
     putchar('\n');
     fflush(stdout);
+    funlockfile(stdout);
 }
 
 /* openjd_progress for frames done out of total, plus fraction of the next: whole percent, printed
@@ -486,7 +499,17 @@ static void openjd_percent(struct progress_state *p, double fraction)
     p->percent = percent;
 }
 
-static void progress(struct progress_state *p, int frame, double sec_per_frame, bool skipped)
+/* A line on the terminal's bar: text, cut to fit the width and padded over what was there. */
+static void bar_line(const struct progress_state *p, const char *text)
+{
+    int room = p->width > 1 ? p->width - 1 : 0; /* the last column would wrap on some terminals */
+    fprintf(stderr, "\r%-*.*s", room, room, text);
+    cmd_bar_open = true;
+}
+
+/* frame f's progress: ms is its sidecar's wall_ms, sec_per_frame the run's mean so far. */
+static void progress(struct progress_state *p, int frame, double ms, double sec_per_frame,
+                     bool skipped)
 {
     bool tty = p->is_tty;
     int done = p->done, total = p->total;
@@ -499,30 +522,131 @@ static void progress(struct progress_state *p, int frame, double sec_per_frame, 
     if (p->is_quiet)
         return;
     if (tty) {
-        int width = 30, fill = total ? done * width / total : width;
-        double eta = sec_per_frame * (total - done);
-        fprintf(stderr, "\r[%.*s%.*s] %d/%d frames  %.2f s/frame  ETA %.0f s ", fill,
-                "##############################", width - fill, "                              ",
-                done, total, sec_per_frame, eta);
-        cmd_bar_open = true;
+        char tail[128], line[512];
+        snprintf(tail, sizeof(tail), " %d/%d frames  %.2f s/frame  ETA %.0f s", done, total,
+                 sec_per_frame, sec_per_frame * (total - done));
+        /* The bar takes what the numbers leave of the width, up to 30; none below 10. */
+        int bar = p->width - 1 - (int)strlen(tail) - 2;
+        bar = bar > 30 ? 30 : bar;
+        if (bar < 10) {
+            bar_line(p, tail + 1);
+        } else {
+            int fill = total ? done * bar / total : bar;
+            snprintf(line, sizeof(line), "[%.*s%.*s]%s", fill, "##############################",
+                     bar - fill, "                              ", tail);
+            bar_line(p, line);
+        }
         if (done == total)
             cmd_end_bar();
     } else if (skipped) {
         fprintf(stderr, "raybundle: frame %d (%d/%d) already complete, skipped\n", frame, done,
                 total);
     } else {
-        fprintf(stderr, "raybundle: frame %d (%d/%d) %.2f s\n", frame, done, total, sec_per_frame);
+        fprintf(stderr, "raybundle: frame %d (%d/%d) %.1f ms\n", frame, done, total, ms);
     }
 }
 
-/* The directory part of a pattern, for the closing line. */
+/* Frames first to last, as a range ("4" or "4 to 7", which reads for negative frames too). */
+static void span_text(int first, int last, char *buf, size_t size)
+{
+    if (first == last)
+        snprintf(buf, size, "frame %d", first);
+    else
+        snprintf(buf, size, "frames %d to %d", first, last);
+}
+
+/* Before frame f: the warm-up frames the integrator renders first, which are slow and write
+ * nothing, so a silent gap would look like a hang or lost frames. */
+static void warmup(struct progress_state *p, int frame, uint32_t count)
+{
+    if (!count || p->is_quiet)
+        return;
+    char span[64], line[160];
+    span_text(frame - (int)count, frame - 1, span, sizeof(span));
+    if (p->is_openjd) {
+        openjd("openjd_status: warming up on %s for frame %d", span, frame);
+    } else if (p->is_tty) {
+        snprintf(line, sizeof(line), "warming up on %s for frame %d (not written)", span, frame);
+        bar_line(p, line);
+    } else {
+        fprintf(stderr, "raybundle: warming up on %s for frame %d (not written)\n", span, frame);
+    }
+}
+
+/* For the writer: "Saved: PATH (MS ms)", MS the sidecar's wall_ms to 0.1 ms, for a farm's log. */
+static void on_written(void *user, int frame, const char *path, double wall_ms)
+{
+    (void)frame;
+    const struct progress_state *p = user;
+    if (!p->is_saved)
+        return;
+    char shown[4096];
+    cmd_display_path(path, shown, sizeof(shown));
+    flockfile(stdout);
+    printf("Saved: %s (%.1f ms)\n", shown,
+           wall_ms); /* the sidecar's wall_ms, as the bar shows it */
+    fflush(stdout);
+    funlockfile(stdout);
+}
+
+/* The frames of f as a farm writes a list: runs of one step as "A-B" or "A-B:S", other frames
+ * alone ("1-3,5-11:2"); cut with "..." when it does not fit size. */
+static void frames_text(const struct rb_render_frames *f, char *buf, size_t size)
+{
+    int run[3] = {0, 0, 0}, n = 0, frame = 0; /* the run's first, step, last; n its frames */
+    size_t len = 0;
+    bool more = rb_render_frames_next(f, INT64_MIN, &frame);
+    buf[0] = '\0';
+    while (n || more) {
+        bool extends = more && (n == 1 || (n > 1 && frame - run[2] == run[1]));
+        if (more && (n == 0 || extends)) {
+            if (n == 0)
+                run[0] = frame;
+            else if (n == 1)
+                run[1] = frame - run[0];
+            run[2] = frame;
+            n++;
+            more = rb_render_frames_next(f, frame, &frame);
+            continue;
+        }
+        /* Close the run. Two frames a step apart but for 1 are two entries, and the second
+         * may start the next run. */
+        char item[48];
+        bool has_again = false;
+        if (n == 1)
+            snprintf(item, sizeof(item), "%d", run[0]);
+        else if (run[1] == 1)
+            snprintf(item, sizeof(item), "%d-%d", run[0], run[2]);
+        else if (n == 2)
+            snprintf(item, sizeof(item), "%d", run[0]), has_again = true;
+        else
+            snprintf(item, sizeof(item), "%d-%d:%d", run[0], run[2], run[1]);
+        if (len + strlen(item) + 5 >= size) {
+            snprintf(buf + len, size - len, "%s...", len ? "," : "");
+            return;
+        }
+        len += (size_t)snprintf(buf + len, size - len, "%s%s", len ? "," : "", item);
+        n = 0;
+        if (has_again) {
+            run[0] = run[2];
+            n = 1;
+        }
+    }
+}
+
+/* The directory part of a pattern, for the closing line, as cmd_display_path shows it. */
 static void output_dir(const char *pattern, char *dir, size_t size)
 {
+    char raw[4096];
     const char *slash = strrchr(pattern, '/');
     if (slash)
-        snprintf(dir, size, "%.*s/", (int)(slash - pattern), pattern);
+        snprintf(raw, sizeof(raw), "%.*s", (int)(slash - pattern), pattern);
     else
-        rb_strlcpy(dir, "./", size);
+        rb_strlcpy(raw, ".", sizeof(raw));
+    cmd_display_path(raw, dir, size);
+    size_t n = strlen(dir);
+    if (n + 1 < size && (n == 0 || dir[n - 1] != '/'))
+        dir[n] = '/', dir[n + 1] = '\0';
 }
 
 /* Progress of a reference frame on a terminal or to a farm; stops sampling once a signal came. */
@@ -534,8 +658,7 @@ static bool on_reference_pass(void *user, uint32_t done, uint32_t total)
     else if (p->is_tty) {
         char line[80];
         snprintf(line, sizeof(line), "  %u/%u samples", done, total);
-        fprintf(stderr, "\r%-66s", line); /* pad over the frame bar */
-        cmd_bar_open = true;
+        bar_line(p, line); /* over the frame bar */
     }
     return !interrupted;
 }
@@ -564,7 +687,10 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
     struct progress_state prog = {.is_tty = !o->quiet && !o->is_openjd && isatty(STDERR_FILENO),
                                   .is_openjd = o->is_openjd,
                                   .is_quiet = o->quiet,
-                                  .percent = -1};
+                                  .is_saved =
+                                      !o->quiet && !o->is_timing_only && !isatty(STDOUT_FILENO),
+                                  .percent = -1,
+                                  .width = cmd_terminal_width(STDERR_FILENO)};
     bool tty = prog.is_tty;
     enum rb_status st;
     rc = RB_EXIT_OK;
@@ -580,6 +706,16 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
     }
     if (o->preview)
         job->color.preview = true;
+    /* A view or display the config lacks fails now, with the names it has, not at the first
+     * frame's preview after a frame's work. */
+    if (job->color.preview && !o->is_timing_only &&
+        (st = rb_io_color_check(
+             &(struct rb_io_color_desc){job->color.config, job->color.display, job->color.view},
+             &err))) {
+        cmd_error("%s", err.msg);
+        rc = exit_for(st, false);
+        goto out;
+    }
     if ((st = rb_scene_load(job->scene_path, o->is_lenient ? RB_SCENE_LOAD_LENIENT : 0, &scene,
                             &err)) ||
         (job->environment.map &&
@@ -632,6 +768,7 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
                                                         .thread_count = threads,
                                                         .is_timing_only = o->is_timing_only,
                                                         .on_pass = on_reference_pass,
+                                                        .on_written = on_written,
                                                         .user = &prog},
                                &r, &err))) {
         cmd_error("%s", err.msg);
@@ -647,9 +784,11 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
     }
 
     int total = prog.total, rendered = 0, skipped = 0, stale = 0;
+    char list[160];
+    frames_text(&o->frames, list, sizeof(list));
     if (o->is_openjd) {
-        openjd("openjd_status: rendering %d frame%s (%d-%d%s)", total, total == 1 ? "" : "s", first,
-               last, chunk_note);
+        openjd("openjd_status: rendering %d frame%s (%s%s)", total, total == 1 ? "" : "s", list,
+               chunk_note);
         openjd_percent(&prog, 0.0);
     }
     signal(SIGINT, on_signal);
@@ -669,10 +808,19 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
         }
         if (o->resume) {
             enum rb_render_verdict v = rb_render_resume_verdict(r, path);
+            bool wrote = false;
+            if (v == RB_RENDER_KEEP && job->color.preview &&
+                (st = rb_render_preview_from_exr(r, path, &wrote, &err))) {
+                cmd_error("%s", err.msg);
+                rc = exit_for(st, true);
+                break;
+            }
+            if (wrote && !o->quiet && !tty && !o->is_openjd)
+                fprintf(stderr, "raybundle: frame %d: wrote its missing preview\n", f);
             if (v == RB_RENDER_KEEP) {
                 prog.done++;
                 skipped++;
-                progress(&prog, f, 0.0, true);
+                progress(&prog, f, 0.0, 0.0, true);
                 continue;
             }
             if (v == RB_RENDER_STALE) {
@@ -689,6 +837,7 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
                        f, temps);
         }
         struct rb_render_frame_info info;
+        warmup(&prog, f, rb_render_warmup_frames(r, f));
         if ((st = rb_render_frame(r, f, path, &info, &err))) {
             cmd_error("%s", err.msg); /* it names the frame */
             rc = exit_for(st, true);
@@ -705,7 +854,7 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
             kill(getpid(), SIGKILL);
         prog.done++;
         rendered++;
-        progress(&prog, f, (rb_monotonic_s() - started) / rendered, false);
+        progress(&prog, f, info.wall_ms, (rb_monotonic_s() - started) / rendered, false);
         if (rendered == 1 && f < last &&
             ((st = rb_render_flush(r, &err)) ||
              (st = rb_render_check_space(path, job->color.preview, total - prog.done, &err)))) {
@@ -735,7 +884,7 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
     } else if (rc == RB_EXIT_OK) {
         char dir[4096];
         output_dir(job->output, dir, sizeof(dir));
-        printf("%d frame%s (%d-%d%s) in %s: %d rendered", total, total == 1 ? "" : "s", first, last,
+        printf("%d frame%s (%s%s) in %s: %d rendered", total, total == 1 ? "" : "s", list,
                chunk_note, dir, rendered);
         if (o->resume)
             printf(", %d kept, %d rendered again (another job)", skipped, stale);

@@ -186,13 +186,17 @@ static enum rb_status render_one(struct rb_integrator *it, int frame_index, bool
     return RB_OK;
 }
 
+uint32_t rb_integrator_warmup_frames(const struct rb_integrator *it, int frame)
+{
+    return it->has_last && it->last_frame == frame - 1 ? 0 : it->history_frames;
+}
+
 enum rb_status rb_integrator_render(struct rb_integrator *it, int frame_index,
                                     struct rb_frame_result *out, struct rb_err *err)
 {
     enum rb_status st = RB_OK;
-    if (!(it->has_last && it->last_frame == frame_index - 1))
-        for (uint32_t k = it->history_frames; k > 0 && st == RB_OK; k--)
-            st = render_one(it, frame_index - (int)k, true, err);
+    for (uint32_t k = rb_integrator_warmup_frames(it, frame_index); k > 0 && st == RB_OK; k--)
+        st = render_one(it, frame_index - (int)k, true, err);
     if (st || (st = render_one(it, frame_index, false, err)))
         return st;
     if ((st = rb_gpu_pass_times(it->gpu, err)) || (st = group_passes(it, err)))

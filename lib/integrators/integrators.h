@@ -37,6 +37,10 @@ enum rb_status rb_integrator_create(const struct rb_integrator_desc *desc,
  * previous frame's vertices; bdpt: its cache count - 1, at least 1). */
 uint32_t rb_integrator_history_frames(const struct rb_integrator *it);
 
+/* How many warm-up frames rendering frame would render first (frames frame - n to frame - 1):
+ * history_frames when frame does not follow the last frame rendered, else 0. */
+uint32_t rb_integrator_warmup_frames(const struct rb_integrator *it, int frame);
+
 /* Renders one frame (time = frame / rate) and reads it back.
  * The contract of history. A frame does depend on earlier ones: bdpt's output reconstructs its
  * indirect light from the temporal caches the frames before it wrote. What it may depend on is

@@ -957,6 +957,45 @@ out:
     return st;
 }
 
+enum rb_status rb_io_color_check(const struct rb_io_color_desc *desc, struct rb_err *err)
+{
+    const char *config = desc && desc->config && *desc->config ? desc->config : NULL;
+    if (!config) {
+        const char *env = getenv("OCIO");
+        config = env && *env ? env : rb_io_default_ocio_config();
+    }
+    struct stat sb;
+    if (stat(config, &sb) != 0)
+        return rb_errf(err, RB_E_IO, "ocio: cannot read config '%s': %s", config, strerror(errno));
+    char display[256] = "", names[2048] = "", msg[480];
+    int r = rb_ocio_view_names(config, desc ? desc->display : NULL, display, names, sizeof(names),
+                               msg, sizeof(msg));
+    if (r != RB_OCIO_OK)
+        return rb_errf(err, r == RB_OCIO_NO_NAME ? RB_E_INVALID : RB_E_EXTERNAL, "%s", msg);
+    const char *view = desc ? desc->view : NULL;
+    if (!view || !*view)
+        return RB_OK; /* the display's default, which the config has */
+    char list[1024] = "";
+    struct rb_suggest near;
+    rb_suggest_init(&near, view);
+    for (char *p = names, *nl; (nl = strchr(p, '\n')); p = nl + 1) {
+        size_t len = (size_t)(nl - p);
+        if (len == strlen(view) && strncmp(p, view, len) == 0)
+            return RB_OK;
+        rb_suggest_offer(&near, p, len);
+        size_t used = strlen(list);
+        snprintf(list + used, sizeof(list) - used, "%s'%.*s'", used ? ", " : "", (int)len, p);
+    }
+    if (near.best[0])
+        return rb_errf(err, RB_E_INVALID,
+                       "ocio: view '%s' not found for display '%s' in config '%s'; did you mean "
+                       "'%s'? (it has %s)",
+                       view, display, config, near.best, list);
+    return rb_errf(err, RB_E_INVALID,
+                   "ocio: view '%s' not found for display '%s' in config '%s' (it has %s)", view,
+                   display, config, list);
+}
+
 enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t height_px,
                                    const float *rgba, const struct rb_io_color_desc *desc,
                                    struct rb_err *err)

@@ -110,3 +110,32 @@ extern "C" int rb_ocio_display_view_apply(const char *config_path, const char *d
         return fail(msg, msg_size, "ocio: " + where + ": unknown exception");
     }
 }
+
+extern "C" int rb_ocio_view_names(const char *config_path, const char *display, char *display_out,
+                                  char *names, size_t size, char *msg, size_t msg_size) noexcept
+{
+    const std::string where = std::string("config '") + config_path + "'";
+    try {
+        OCIO::ConstConfigRcPtr config = OCIO::Config::CreateFromFile(config_path);
+        config->validate();
+        std::string disp = is_set(display) ? display : config->getDefaultDisplay();
+        bool found = false;
+        for (int i = 0; i < config->getNumDisplays() && !found; i++)
+            found = disp == config->getDisplay(i);
+        if (!found)
+            return fail(msg, msg_size,
+                        "ocio: display '" + disp + "' not found in " + where +
+                            " (has: " + join_displays(config) + ")",
+                        RB_OCIO_NO_NAME);
+        std::string list;
+        for (int i = 0; i < config->getNumViews(disp.c_str()); i++)
+            list += std::string(config->getView(disp.c_str(), i)) + "\n";
+        copy_name(names, size, list.c_str());
+        copy_name(display_out, 256, disp.c_str());
+        return RB_OCIO_OK;
+    } catch (const std::exception &e) {
+        return fail(msg, msg_size, "ocio: " + where + ": " + e.what());
+    } catch (...) {
+        return fail(msg, msg_size, "ocio: " + where + ": unknown exception");
+    }
+}

@@ -35,6 +35,12 @@ int rb_ocio_display_view_apply(const char *config_path, const char *display, con
                                char *display_out, char *view_out, size_t name_size, char *msg,
                                size_t msg_size) RB_SHIM_NOEXCEPT;
 
+/* The views of display (NULL or "": the config's default display) in the config, in its order,
+ * each followed by '\n', into names (cut at size); the display's name to display_out. Fails as
+ * rb_ocio_display_view_apply does for a config or display it cannot find. */
+int rb_ocio_view_names(const char *config_path, const char *display, char *display_out, char *names,
+                       size_t size, char *msg, size_t msg_size) RB_SHIM_NOEXCEPT;
+
 #ifdef __cplusplus
 }
 #endif

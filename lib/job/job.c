@@ -287,7 +287,8 @@ static const struct key keys[] = {
     K("color.display", KT_STRING, JOB(color.display), NOLO, NOHI, NULL, 0,
       "OpenColorIO display for previews; none: the config's default"),
     K("color.view", KT_STRING, JOB(color.view), NOLO, NOHI, NULL, 0,
-      "OpenColorIO view for previews; none: the display's default"),
+      "OpenColorIO view for previews (--view overrides it); none: the display's default, in the "
+      "bundled config 'ACES 1.0 - SDR Video', which tone-maps highlights instead of clipping"),
     K("color.preview", KT_BOOL, JOB(color.preview), NOLO, NOHI, "false", 0,
       "also write NAME.####.png through the display and view beside each EXR"),
 };
@@ -410,19 +411,29 @@ static void suggest_name(const struct key *k, const char *word, char *buf, size_
 }
 
 /* "between 16 and 8192", "> 0", "> 0 and < 180"; "" when unbounded. */
+/* A bound as the key's type reads it: integers whole (4294967295, not 4.29497e+09). */
+static void bound_text(const struct key *k, double v, char *buf, size_t size)
+{
+    bool is_int = k->type == KT_INT || k->type == KT_UINT || k->type == KT_UINT2;
+    snprintf(buf, size, is_int ? "%.0f" : "%g", v);
+}
+
 static void range_text(const struct key *k, char *buf, size_t size)
 {
     bool lo = isfinite(k->min), hi = isfinite(k->max);
     const char *ge = (k->flags & KF_MIN_EXCL) ? ">" : ">=";
     const char *le = (k->flags & KF_MAX_EXCL) ? "<" : "<=";
+    char a[32], b[32];
+    bound_text(k, k->min, a, sizeof(a));
+    bound_text(k, k->max, b, sizeof(b));
     if (lo && hi && !(k->flags & (KF_MIN_EXCL | KF_MAX_EXCL)))
-        snprintf(buf, size, "between %g and %g", k->min, k->max);
+        snprintf(buf, size, "between %s and %s", a, b);
     else if (lo && hi)
-        snprintf(buf, size, "%s %g and %s %g", ge, k->min, le, k->max);
+        snprintf(buf, size, "%s %s and %s %s", ge, a, le, b);
     else if (lo)
-        snprintf(buf, size, "%s %g", ge, k->min);
+        snprintf(buf, size, "%s %s", ge, a);
     else if (hi)
-        snprintf(buf, size, "%s %g", le, k->max);
+        snprintf(buf, size, "%s %s", le, b);
     else
         buf[0] = '\0';
 }
@@ -1556,25 +1567,56 @@ static const char *default_text(const struct key *k)
     return k->def ? k->def : (k->flags & KF_REQUIRED) ? "required" : "none";
 }
 
-void rb_job_print_keys(FILE *f)
+/* Writes text's words to f from column col, breaking before a word that would pass width and
+ * going on at column indent; a word longer than a line gets a line of its own. Ends the line. */
+static void print_wrapped(FILE *f, const char *text, int col, int indent, int width)
 {
-    int wp = 0, wt = 0, wd = 0;
-    char type[128], range[80];
-    for (size_t i = 0; i < KEY_COUNT; i++) {
-        type_text(&keys[i], type, sizeof(type));
-        int lp = (int)strlen(keys[i].path), lt = (int)strlen(type);
-        int ld = (int)strlen(default_text(&keys[i]));
-        wp = lp > wp ? lp : wp;
-        wt = lt > wt ? lt : wt;
-        wd = ld > wd ? ld : wd;
+    bool is_first = true;
+    for (const char *p = text; *p;) {
+        while (*p == ' ')
+            p++;
+        int len = (int)strcspn(p, " ");
+        if (!len)
+            break;
+        if (!is_first && col + 1 + len > width) {
+            fprintf(f, "\n%*s", indent, "");
+            col = indent;
+        } else if (!is_first) {
+            fputc(' ', f);
+            col++;
+        }
+        fprintf(f, "%.*s", len, p);
+        col += len;
+        p += len;
+        is_first = false;
     }
+    fputc('\n', f);
+}
+
+size_t rb_job_print_keys(FILE *f, const char *prefix, int width)
+{
+    char type[128], range[80], head[512], text[1024];
+    size_t printed = 0, len = prefix ? strlen(prefix) : 0;
+    if (width < 40) /* narrower than this, the indented help would be a word a line */
+        width = 40;
     for (size_t i = 0; i < KEY_COUNT; i++) {
+        if (len && strncmp(keys[i].path, prefix, len) != 0)
+            continue;
         type_text(&keys[i], type, sizeof(type));
         range_text(&keys[i], range, sizeof(range));
-        fprintf(f, "%-*s  %-*s  %-*s  %s%s%s%s\n", wp, keys[i].path, wt, type, wd,
-                default_text(&keys[i]), keys[i].help, range[0] ? " (" : "", range,
-                range[0] ? ")" : "");
+        /* A block a key: the path at the margin (so a reader, or grep '^frames', finds it),
+         * then its type and default, then its help indented, each wrapped to the width. */
+        const char *def = default_text(&keys[i]);
+        snprintf(head, sizeof(head), "%s (%s, %s%s)", keys[i].path, type,
+                 strcmp(def, "required") ? "default " : "", def);
+        print_wrapped(f, head, 0, 4, width);
+        snprintf(text, sizeof(text), "%s%s%s%s", keys[i].help, range[0] ? " (" : "", range,
+                 range[0] ? ")" : "");
+        fputs("    ", f);
+        print_wrapped(f, text, 4, 4, width);
+        printed++;
     }
+    return printed;
 }
 
 size_t rb_job_key_count(void)

@@ -250,8 +250,11 @@ const char *rb_integrator_name(enum rb_integrator_kind kind);
 /* Returns RB_INTEGRATOR_DEFAULT when name is unknown. */
 enum rb_integrator_kind rb_integrator_from_name(const char *name);
 
-/* Writes every key with its type, default and help to f (for `raybundle help job`). */
-void rb_job_print_keys(FILE *f);
+/* Writes the keys whose dotted path starts with prefix (NULL or "": every key) to f, for
+ * `raybundle help job`: each as its path, type and default on a line at the margin, then its help
+ * (with the values it takes) indented by four, every line wrapped to width columns (at least 40;
+ * a word longer than a line stands alone). Returns how many keys it wrote. */
+size_t rb_job_print_keys(FILE *f, const char *prefix, int width);
 /* The number of keys in the table and the dotted path of key i (for the man-page test). */
 size_t rb_job_key_count(void);
 const char *rb_job_key_path(size_t i);

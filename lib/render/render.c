@@ -33,6 +33,7 @@ struct rb_render {
     struct rb_integrator *it;
     struct rb_reference *ref;
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
+    void (*on_written)(void *user, int frame, const char *path, double wall_ms);
     void *user;
     bool was_stopped;    /* on_pass said stop during this frame */
     bool strict;         /* desc->strict */
@@ -92,6 +93,7 @@ enum rb_status rb_render_create(const struct rb_render_desc *desc, struct rb_ren
     r->job = job;
     r->setup = desc->setup;
     r->on_pass = desc->on_pass;
+    r->on_written = desc->on_written;
     r->strict = desc->strict;
     r->user = desc->user;
     r->is_timing_only = desc->is_timing_only;
@@ -209,6 +211,11 @@ int rb_render_last_frame(const struct rb_job *job, const struct rb_scene *scene)
     double speed = job->animation.speed > 0.0 ? job->animation.speed : 1.0;
     int frames = (int)ceil(dur / speed * job->rate_fps - 1e-6);
     return job->frame_start + (frames > 1 ? frames - 1 : 0);
+}
+
+uint32_t rb_render_warmup_frames(const struct rb_render *r, int f)
+{
+    return r->it ? rb_integrator_warmup_frames(r->it, f) : 0;
 }
 
 /* ---- resume --------------------------------------------------------------------------------- */
@@ -353,6 +360,45 @@ static enum rb_status write_preview(const struct rb_render *r, const char *exr_p
     return rb_io_preview_write(path, f->width_px, f->height_px, r->scratch, &cd, err);
 }
 
+enum rb_status rb_render_preview_from_exr(const struct rb_render *r, const char *path, bool *wrote,
+                                          struct rb_err *err)
+{
+    char png[4096];
+    struct rb_io_image img = {0};
+    float *rgba = NULL;
+    *wrote = false;
+    enum rb_status st = rb_io_sidecar_path(path, ".png", png, sizeof(png), err);
+    if (st || access(png, F_OK) == 0)
+        return st;
+    if ((st = rb_io_image_read(path, &img, err)))
+        return st;
+    int ch[3] = {rb_io_image_channel(&img, "R"), rb_io_image_channel(&img, "G"),
+                 rb_io_image_channel(&img, "B")};
+    size_t n = (size_t)img.width_px * img.height_px;
+    if (ch[0] < 0 || ch[1] < 0 || ch[2] < 0) {
+        st = rb_errf(err, RB_E_INVALID, "'%s' has no R, G and B to make its preview from", path);
+        goto out;
+    }
+    if (!(rgba = malloc(n * 4 * sizeof(float)))) {
+        st = rb_errf(err, RB_E_NOMEM, "out of memory for the preview of '%s'", path);
+        goto out;
+    }
+    /* Opaque, as write_preview makes it. */
+    for (size_t i = 0; i < n; i++) {
+        for (int c = 0; c < 3; c++)
+            rgba[i * 4 + c] = img.pixels[i * img.channel_count + (size_t)ch[c]];
+        rgba[i * 4 + 3] = 1.0f;
+    }
+    const struct rb_job *job = r->job;
+    struct rb_io_color_desc cd = {job->color.config, job->color.display, job->color.view};
+    if ((st = rb_io_preview_write(png, img.width_px, img.height_px, rgba, &cd, err)) == RB_OK)
+        *wrote = true;
+out:
+    free(rgba);
+    rb_io_image_release(&img);
+    return st;
+}
+
 static enum rb_status write_timing(const struct rb_render *r, const char *exr_path,
                                    const struct rb_frame_result *f, double wall_ms,
                                    struct rb_err *err)
@@ -442,6 +488,8 @@ static void *writer_main(void *arg)
                    (!r->is_timing_only && r->job->color.preview &&
                     (st = write_preview(r, e->path, &e->f, &err))) ||
                    (st = write_timing(r, e->path, &e->f, e->wall_ms, &err)));
+        if (r->write_st == RB_OK && st == RB_OK && r->on_written)
+            r->on_written(r->user, e->f.frame, e->path, e->wall_ms);
         pthread_mutex_lock(&r->lock);
         if (st && r->write_st == RB_OK) {
             r->write_st = st;

@@ -29,6 +29,9 @@ struct rb_render_desc {
     /* reference: called after each pass of samples; returning false stops the frame, which is
      * then partial and not written. May be NULL. */
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
+    /* Called on the writer thread once every file of a frame is written and renamed into place
+     * (path: its EXR; wall_ms: its sidecar's), in frame order. May be NULL. */
+    void (*on_written)(void *user, int frame, const char *path, double wall_ms);
     void *user;
 };
 
@@ -47,6 +50,11 @@ const char *rb_render_driver(const struct rb_render *r);
 /* The last frame of the job's range: frames.end, or the end of the selected animation. */
 int rb_render_last_frame(const struct rb_job *job, const struct rb_scene *scene);
 
+/* How many warm-up frames rendering frame f renders first (frames f - n to f - 1: they fill
+ * what the frames after them read, and are not written); 0 when f follows the last frame
+ * rendered, and always for the reference. */
+uint32_t rb_render_warmup_frames(const struct rb_render *r, int f);
+
 /* What --resume does with frame f. */
 enum rb_render_verdict {
     RB_RENDER_NEW = 0, /* no complete frame there: render it */
@@ -56,6 +64,12 @@ enum rb_render_verdict {
 /* Decides for the frame at path (the EXR; its timing sidecar beside it, and for bdpt its hit
  * ratios: a frame without a complete NAME.####.hits.exr is rendered again). */
 enum rb_render_verdict rb_render_resume_verdict(const struct rb_render *r, const char *path);
+
+/* --resume --preview for a kept frame (RB_RENDER_KEEP): when the preview beside the EXR at path
+ * is missing, writes it from the EXR's beauty, the same bits a render writes (the beauty is
+ * stored as float), and sets *wrote. Fails naming the file. */
+enum rb_status rb_render_preview_from_exr(const struct rb_render *r, const char *path, bool *wrote,
+                                          struct rb_err *err);
 
 /* What rendering a frame did. */
 struct rb_render_frame_info {

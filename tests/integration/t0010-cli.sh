@@ -72,7 +72,7 @@ rb render jobs/demo.yaml --frames 3 --size 32x18 --output "$T/one/still.exr" -q
 expect_exit 0 "one frame to a pattern without '#' renders"
 check "it is written under its number" test -s "$T/one/still.0003.exr"
 check "the closing line says where the frames went" \
-    grep -q "^1 frame (3-3) in $T/one/: 1 rendered, [0-9.]* s\$" "$T/stdout"
+    grep -q "^1 frame (3) in $T/one/: 1 rendered, [0-9.]* s\$" "$T/stdout"
 rb render jobs/demo.yaml --device no-such-device --frames 0 --out "$T/dev"
 expect_exit 3 "a device that does not exist exits 3"
 stderr_has "no device matches 'no-such-device'" "missing device is named"
@@ -87,6 +87,28 @@ check "info says whether a device is usable" grep -q 'usable: yes' "$T/stdout"
 rb help job
 expect_exit 0 "help job exits 0"
 check "help job lists integrator.direct.shadow_size" grep -q 'integrator.direct.shadow_size' "$T/stdout"
+# Wrapped to 80 columns when stdout is no terminal, or to $COLUMNS; integer bounds whole.
+check "help job: no line is longer than 80 columns (not a terminal)" \
+    sh -c "! awk 'length > 80' '$T/stdout' | grep -q ."
+check "help job prints integer bounds as integers" \
+    sh -c "grep -q 'between 0 and 4294967295' '$T/stdout' && ! grep -q 'e+0' '$T/stdout'"
+COLUMNS=60 "$RB" help job >"$T/narrow"
+check "help job fits COLUMNS=60" sh -c "! awk 'length > 60' '$T/narrow' | grep -q ."
+check "help job at 60 columns lists the same keys" \
+    test "$(grep -c '^[a-z]' "$T/narrow")" -eq "$(grep -c '^[a-z]' "$T/stdout")"
+rb help job camera
+expect_exit 0 "help job camera exits 0"
+check "help job camera lists only camera.* keys" \
+    sh -c "grep -q '^camera.fov_y_deg ' '$T/stdout' && ! grep '^[a-z]' '$T/stdout' | grep -qv '^camera'"
+rb help job integrator.bdpt.v
+check "help job takes any prefix of a dotted path" \
+    test "$(grep '^[a-z]' "$T/stdout" | cut -d' ' -f1 | sort | tr '\n' ' ')" = \
+    "integrator.bdpt.view_triangles integrator.bdpt.vpl_bias integrator.bdpt.vpl_size integrator.bdpt.vpls "
+rb help job camra
+expect_exit 2 "help job with a prefix no key has exits 2"
+check "help job camra: did you mean 'camera'" \
+    grep -qx "raybundle: error: no job key starts with 'camra'; did you mean 'camera'?" "$T/stderr"
+check "help job camra prints no keys" test ! -s "$T/stdout"
 
 if command -v mandoc >/dev/null; then
     for page in man/raybundle.1 man/raybundle-job.5; do

@@ -199,7 +199,7 @@ frames_in() { # frames_in DIR: the frame numbers of DIR's EXRs, on one line
 }
 rb render jobs/demo.yaml --size 32x18 --integrator direct -q --frames 1-10x2 --out "$T/x"
 expect_exit 0 "--frames 1-10x2 renders"
-check "--frames 1-10x2 says it rendered 5 frames" grep -q '^5 frames (1-9) in ' "$T/stdout"
+check "--frames 1-10x2 says it rendered 5 frames" grep -q '^5 frames (1-9:2) in ' "$T/stdout"
 rb render jobs/demo.yaml --size 32x18 --integrator direct -q --frames 1-10:2 --out "$T/colon"
 expect_exit 0 "--frames 1-10:2 renders"
 check "--frames 1-10x2 renders frames 1 3 5 7 9" test "$(frames_in "$T/x")" = "1 3 5 7 9 "

@@ -44,7 +44,7 @@ same_as_whole "$T/five" 10 11
 # A list with gaps: each frame after a gap is warmed up, so it equals the whole run's.
 rb render jobs/demo.yaml --out "$T/list" --frames 9,1-3,5,7-11:2 $args
 expect_exit 0 "a frame list renders"
-check "the list's frames are counted once each" grep -q "^7 frames (1-11) in " "$T/stdout"
+check "the list's frames are counted once each, and listed" grep -q "^7 frames (1-3,5-11:2) in " "$T/stdout"
 same_as_whole "$T/list" 1 2 3 5 7 9 11
 # A chunk of a list: its 7 frames in 2 chunks are 4 and 3.
 rb render jobs/demo.yaml --out "$T/listchunk" --frames 1-3,5,7-11:2 --chunk 1/2 $args

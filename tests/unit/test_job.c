@@ -639,26 +639,47 @@ static void test_key_table(void **state)
     }
     assert_string_equal(rb_job_key_path(0), "scene");
 
-    /* One line per key, each starting with its path. */
+    /* A block per key: its path at the margin, its help indented; no line past the width. */
     char *buf = NULL;
     size_t size = 0;
     FILE *f = open_memstream(&buf, &size);
     assert_non_null(f);
-    rb_job_print_keys(f);
+    assert_int_equal(rb_job_print_keys(f, NULL, 80), n);
     fclose(f);
-    size_t lines = 0;
-    for (char *line = buf; line && *line; lines++) {
+    size_t keys = 0;
+    for (char *line = buf; line && *line;) {
         char *nl = strchr(line, '\n');
         assert_non_null(nl);
-        assert_true(lines < n);
-        const char *path = rb_job_key_path(lines);
-        assert_memory_equal(line, path, strlen(path));
-        assert_int_equal(line[strlen(path)], ' ');
+        assert_true(nl - line <= 80);
+        if (line[0] != ' ') {
+            assert_true(keys < n);
+            const char *path = rb_job_key_path(keys++);
+            assert_memory_equal(line, path, strlen(path));
+            assert_int_equal(line[strlen(path)], ' ');
+        }
         line = nl + 1;
     }
-    assert_int_equal(lines, n);
+    assert_int_equal(keys, n);
+    /* Integer bounds print whole. */
+    assert_non_null(strstr(buf, "between 0 and 4294967295"));
+    assert_null(strstr(buf, "e+0"));
     assert_non_null(strstr(buf, "integrator.direct.shadow_size"));
     assert_non_null(strstr(buf, "out/frame.####.exr"));
+    free(buf);
+
+    /* A prefix picks the keys whose path starts with it. */
+    buf = NULL;
+    f = open_memstream(&buf, &size);
+    assert_non_null(f);
+    size_t camera = rb_job_print_keys(f, "camera.", 60);
+    fclose(f);
+    assert_true(camera >= 5 && camera < n);
+    assert_null(strstr(buf, "\nscene"));
+    assert_non_null(strstr(buf, "camera.fov_y_deg"));
+    free(buf);
+    f = open_memstream(&buf, &size);
+    assert_int_equal(rb_job_print_keys(f, "camra", 80), 0);
+    fclose(f);
     free(buf);
 }
 
