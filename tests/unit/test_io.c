@@ -585,7 +585,8 @@ static void test_preview(void **state)
     struct rb_err err = RB_ERR_INIT;
     const char *path = tpath("preview/shot.0001.png");
     assert_int_equal(rb_io_make_parent_dirs(path, &err), RB_OK);
-    if (rb_io_preview_write(path, PW, PH, px, &(struct rb_io_color_desc){.config = CONFIG}, &err))
+    if (rb_io_preview_write(path, PW, PH, px,
+                            &(struct rb_io_color_desc){.config = CONFIG, .view = "Standard"}, &err))
         fail_msg("%s", err.msg);
     assert_int_equal(count_entries(tpath("preview"), ".tmp."), 0);
 
@@ -632,6 +633,16 @@ static void test_preview(void **state)
     if (!(ag > 46 && ag < g && a4 > ag && a4 < 255))
         fail_msg("ACES view: 0.18 -> %d, 4.0 -> %d", ag, a4);
     rb_io_image_release(&img);
+
+    /* No view named: the display's default, the ACES view (Standard clips high dynamic range). */
+    const char *plain = tpath("preview/default.png");
+    if (rb_io_preview_write(plain, PW, PH, px, &(struct rb_io_color_desc){.config = CONFIG}, &err))
+        fail_msg("%s", err.msg);
+    if (rb_io_image_read(plain, &img, &err))
+        fail_msg("%s", err.msg);
+    assert_int_equal(png_value(&img, 0, 1, 0), ag);
+    assert_int_equal(png_value(&img, 2, 1, 0), a4);
+    rb_io_image_release(&img);
 }
 
 static void test_preview_errors(void **state)
@@ -653,7 +664,7 @@ static void test_preview_errors(void **state)
                             &(struct rb_io_color_desc){.config = CONFIG, .view = "Filmic"}, &err),
         RB_E_INVALID);
     assert_non_null(strstr(err.msg, "view 'Filmic'"));
-    assert_non_null(strstr(err.msg, "Standard, ACES 1.0 - SDR Video, Raw"));
+    assert_non_null(strstr(err.msg, "ACES 1.0 - SDR Video, Standard, Raw"));
 
     const char *missing = tpath("nope/config.ocio");
     assert_int_equal(
