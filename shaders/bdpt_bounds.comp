@@ -1,10 +1,14 @@
 // bdpt, bounds (seed 000, B.1): the bounding box of the points the G-buffer sees, which each
-// ray-bundle's projection is fitted to. Each workgroup reduces its 64 pixels in shared memory,
-// then adds its box with integer atomic min and max on order-preserving float bits, so the box
-// does not depend on the order the workgroups run in. The pass fills lo with ~0 and hi with 0.
+// ray-bundle's projection is fitted to. Each invocation takes a 4x4 lattice of pixels 8 apart
+// (RB_BDPT_BOUNDS_TILE_PX across a workgroup), so that the workgroup's reduction in shared
+// memory, whose barriers cost more than the fetches on a CPU device, is paid once for 1024
+// pixels; then the workgroup adds its box with integer atomic min and max on order-preserving
+// float bits, so the box does not depend on the order the workgroups run in. The pass fills lo
+// with ~0 and hi with 0.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "bindings_shared.h"
+#include "bdpt_shared.h"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -27,13 +31,22 @@ uint ordered(float f)
 
 void main()
 {
-    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 base = ivec2(gl_WorkGroupID.xy) * RB_BDPT_BOUNDS_TILE_PX + ivec2(gl_LocalInvocationID.xy);
     uint i = gl_LocalInvocationIndex;
     ivec2 size = imageSize(gb_position);
-    vec4 p = all(lessThan(px, size)) ? imageLoad(gb_position, px) : vec4(0.0);
     const float big = 3.0e38;
-    s_lo[i] = p.w > 0.0 ? p.xyz : vec3(big);
-    s_hi[i] = p.w > 0.0 ? p.xyz : vec3(-big);
+    vec3 lo3 = vec3(big), hi3 = vec3(-big);
+    for (int y = 0; y < RB_BDPT_BOUNDS_TILE_PX; y += 8)
+        for (int x = 0; x < RB_BDPT_BOUNDS_TILE_PX; x += 8) {
+            ivec2 px = base + ivec2(x, y);
+            vec4 p = all(lessThan(px, size)) ? imageLoad(gb_position, px) : vec4(0.0);
+            if (p.w > 0.0) {
+                lo3 = min(lo3, p.xyz);
+                hi3 = max(hi3, p.xyz);
+            }
+        }
+    s_lo[i] = lo3;
+    s_hi[i] = hi3;
     barrier();
     for (uint step = 32u; step > 0u; step >>= 1) {
         if (i < step) {

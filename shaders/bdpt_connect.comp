@@ -58,11 +58,12 @@ layout(push_constant) uniform Push { rb_gpu_bdpt_connect_push pc; };
 
 // Whether VPL k sees p (geometric normal ng) through its paraboloid map: p is lifted off its
 // surface by a texel's footprint along ng (at most 4 / size radians at the distance) and its
-// distance from the VPL's eye tested against the stored one with a bias of vpl_bias of it.
+// distance from the VPL's eye tested against the stored one with a bias of vpl_bias of it. VPL
+// k of the iteration has a whole layer; its bounces (every other VPL connect sees) a corner.
 float vpl_visibility(uint k, vec3 p, vec3 ng)
 {
     rb_gpu_view v = vpl_views[k];
-    float far = v.origin.w, size = pc.params.y;
+    float far = v.origin.w, size = k == pc.index.x ? pc.params.y : float(pc.bounce.z);
     p += ng * (length(p - v.origin.xyz) * 4.0 / size);
     vec3 q = (v.transform * vec4(p, 1.0)).xyz;
     float len = length(q);

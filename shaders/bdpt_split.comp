@@ -3,8 +3,9 @@
 // connect dispatch reads one contiguous block of the pixels that share its VPL and bundle.
 // Four images: position and view depth (w = 0: no surface), shading normal and roughness, F0
 // and F90, the octahedral geometric normal. It runs over the split images, whose sub-images are
-// rounded up to whole pixels: texels no pixel maps to get w = 0. It also zeroes the four light
-// accumulators that the connect passes add to.
+// rounded up to whole pixels: texels no pixel maps to get w = 0. The four light accumulators
+// that the connect passes add to are cleared before it (a transfer clear, a memset on a CPU
+// device, costs less than storing zeros here).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "bindings_shared.h"
@@ -22,10 +23,6 @@ layout(binding = RB_BIND_BDPT_SPLIT_OUT + 0, rgba32f) uniform writeonly image2D 
 layout(binding = RB_BIND_BDPT_SPLIT_OUT + 1, rgba32f) uniform writeonly image2D o_normal;
 layout(binding = RB_BIND_BDPT_SPLIT_OUT + 2, rgba32f) uniform writeonly image2D o_fresnel;
 layout(binding = RB_BIND_BDPT_SPLIT_OUT + 3, rgba32f) uniform writeonly image2D o_geometric;
-layout(binding = RB_BIND_BDPT_SPLIT_LIGHT + 0, rgba32f) uniform writeonly image2D o_light0;
-layout(binding = RB_BIND_BDPT_SPLIT_LIGHT + 1, rgba32f) uniform writeonly image2D o_light1;
-layout(binding = RB_BIND_BDPT_SPLIT_LIGHT + 2, rgba32f) uniform writeonly image2D o_light2;
-layout(binding = RB_BIND_BDPT_SPLIT_LIGHT + 3, rgba32f) uniform writeonly image2D o_light3;
 layout(push_constant) uniform Push { rb_gpu_bdpt_image_push pc; };
 
 void main()
@@ -36,10 +33,6 @@ void main()
     int n = int(pc.split.x);
     ivec2 sub = ivec2(pc.split.yz);
     ivec2 px = (sp % sub) * n + sp / sub;
-    imageStore(o_light0, sp, vec4(0.0));
-    imageStore(o_light1, sp, vec4(0.0));
-    imageStore(o_light2, sp, vec4(0.0));
-    imageStore(o_light3, sp, vec4(0.0));
     if (any(greaterThanEqual(px, imageSize(gb_position)))) {
         imageStore(o_position, sp, vec4(0.0));
         imageStore(o_normal, sp, vec4(0.0));

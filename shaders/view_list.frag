@@ -30,6 +30,10 @@ layout(location = 3) flat in uint i_material;
 
 void main()
 {
+    // Texels no search will read (RB_VIEW_LIST_SKIP) take no nodes: most of a bdpt bundle's.
+    ivec3 texel = ivec3(ivec2(gl_FragCoord.xy), int(pc.index.y));
+    if (imageLoad(heads, texel).r == RB_VIEW_LIST_SKIP)
+        return;
     // Alpha-masked texels are holes for bundles as for the camera; single-sided faces seen from
     // behind are kept, since a bundle ray meets them from either side.
     rb_gpu_material m = materials[i_material];
@@ -42,7 +46,6 @@ void main()
         return;
     }
     float depth = abs(rb_view_depth(views[pc.index.x], pc.index.z, i_pos));
-    ivec3 texel = ivec3(ivec2(gl_FragCoord.xy), int(pc.index.y));
     uint next = imageAtomicExchange(heads, texel, index);
     nodes[index].depth = gl_FrontFacing ? depth : -depth;
     nodes[index].normal = rb_view_polar_encode(normalize(i_normal));

@@ -10,15 +10,15 @@
  * heuristic hands their short connections, where the VPL's 1/r^2 would spike, to the bounce; an
  * emitter's bounce has a bounce of its own, VPL 2 K_v + i, for the emitter's second bounce. Each
  * VPL gets a paraboloid shadow map; each global ray-bundle is an orthographic view into per-pixel
- * linked lists, connected to the sub-image of the interleaved G-buffer it lights before the next
- * one reuses the list. Temporal interleaved sampling (seed 000, section A): l caches, one per
- * subpixel offset; frame f computes cache f mod l alone, with that slot's own block of the
- * sampling table on a G-buffer jittered by the slot's offset, overwriting it whole (light and
- * depth); the reproject pass finds where each pixel's surface was in the frames of the other
- * caches, and reconstruct takes the hit-weighted mean of the caches (equations 1 to 3) for
- * output, which adds the direct light of the frame's own, centred G-buffer. Its history is the
- * l - 1 frames before (at least one, for motion vectors); frames before the sequence's start
- * fill no cache. */
+ * linked lists, kept only at the texels where the points of the sub-image of the interleaved
+ * G-buffer it lights land, connected to that sub-image before the next one reuses the list.
+ * Temporal interleaved sampling (seed 000, section A): l caches, one per subpixel offset; frame f
+ * computes cache f mod l alone, with that slot's own block of the sampling table on a G-buffer
+ * jittered by the slot's offset, overwriting it whole (light and depth); the reproject pass finds
+ * where each pixel's surface was in the frames of the other caches, and reconstruct takes the
+ * hit-weighted mean of the caches (equations 1 to 3) for output, which adds the direct light of the
+ * frame's own, centred G-buffer. Its history is the l - 1 frames before (at least one, for motion
+ * vectors); frames before the sequence's start fill no cache. */
 #include "integrators/integrators_int.h"
 
 #include <limits.h>
@@ -342,8 +342,8 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
         st = rb_frame_image(gpu, sw, sh, 1, f, storage, false, split_names[i], &b->split[i], err);
     uint32_t w = frame->width_px, h = frame->height_px, l = b->cache_count;
     for (int i = 0; i < RB_BDPT_LIGHT_COUNT && st == RB_OK; i++)
-        if ((st = rb_frame_image(gpu, sw, sh, 1, f, storage, false, light_names[0][i], &b->accum[i],
-                                 err)) == RB_OK &&
+        if ((st = rb_frame_image(gpu, sw, sh, 1, f, storage | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                 false, light_names[0][i], &b->accum[i], err)) == RB_OK &&
             (st = rb_frame_image(gpu, w, h, 1, f, storage, false, light_names[1][i],
                                  &b->gathered[i], err)) == RB_OK &&
             (st = rb_frame_image(gpu, w, h, l, f, storage, true, light_names[2][i], &b->filtered[i],
@@ -427,6 +427,9 @@ static enum rb_status create(struct rb_integrator *it, void **state, struct rb_e
         .sub_width_px = (frame->width_px + n - 1) / n,
         .sub_height_px = (frame->height_px + n - 1) / n,
         .vpl_size_px = job->vpl_size_px,
+        .bounce_vpl_size_px = job->bounce_vpl_size_px && job->bounce_vpl_size_px < job->vpl_size_px
+                                  ? job->bounce_vpl_size_px
+                                  : job->vpl_size_px,
         .bundle_size_px = job->bundle_size_px,
         .filter_radius_px = job->filter_radius_px,
         .filter_depth = job->filter_depth,
@@ -519,7 +522,6 @@ static void record_rsm(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer
         {.image = &frame->linear_textures, .use = RB_GPU_FRAGMENT_SAMPLED},
         {.image = &b->rsm[0], .use = RB_GPU_COLOR_ATTACHMENT},
         {.image = &b->rsm[1], .use = RB_GPU_COLOR_ATTACHMENT},
-        {.image = &b->rsm[2], .use = RB_GPU_COLOR_ATTACHMENT},
         {.image = &b->rsm[3], .use = RB_GPU_COLOR_ATTACHMENT},
         {.image = &b->rsm_depth, .use = RB_GPU_DEPTH_ATTACHMENT},
     };
@@ -538,7 +540,8 @@ static void record_rsm(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer
             .first_view = (uint32_t)first,
             .first_layer = (uint32_t)first,
             .view_count = kind == RB_KIND_POINT ? 6 : 1,
-            .targets = {&b->rsm[0], &b->rsm[1], &b->rsm[2], &b->rsm[3]},
+            /* generate reads where the light lands, not its flux: no flux target */
+            .targets = {&b->rsm[0], &b->rsm[1], NULL, &b->rsm[3]},
             .depth = &b->rsm_depth,
             .intensity = {lights[i].color[0], lights[i].color[1], lights[i].color[2]},
             .use_simplified = true,
@@ -615,8 +618,19 @@ static void record_bundle(struct rb_integrator *it, struct bdpt *d, VkCommandBuf
         {.image = &b->bundle.heads, .use = RB_GPU_FRAGMENT_READ_WRITE},
         {.buffer = &b->bundle.nodes, .use = RB_GPU_FRAGMENT_READ_WRITE},
         {.buffer = &d->usage, .use = RB_GPU_TRANSFER_WRITE},
+        {.image = &b->split[0], .use = RB_GPU_COMPUTE_READ},
     };
     rb_integrator_pass_begin(it, cmd, "bundle", uses, COUNT(uses));
+    /* Lists only where sub-image k mod n^2's points search the bundle: the rest of the grid
+     * skips the fragment shader's work. */
+    rb_view_list_clear(cmd, &b->bundle, 0, 1, RB_VIEW_LIST_SKIP,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
+                           VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT);
+    rb_pass_bdpt_mark_record(d->passes, cmd, b, k);
+    rb_gpu_memory_barrier(
+        cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+        VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+        VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
     struct rb_view_batch batch = {
         .kind = RB_VIEW_KIND_ORTHOGRAPHIC,
         .output = RB_VIEW_OUTPUT_LIST,
@@ -625,6 +639,7 @@ static void record_bundle(struct rb_integrator *it, struct bdpt *d, VkCommandBuf
         .first_layer = 0,
         .view_count = 1,
         .list = &b->bundle,
+        .has_marked_heads = true,
         .use_simplified = true,
     };
     rb_pass_view_record(d->views, cmd, frame, ctx->cur, &batch);
@@ -740,18 +755,25 @@ static void record_cache(struct rb_integrator *it, struct bdpt *d, VkCommandBuff
             {.image = &b->vpl_maps, .use = RB_GPU_COLOR_ATTACHMENT},
             {.image = &b->vpl_depth, .use = RB_GPU_DEPTH_ATTACHMENT},
         };
+        /* The VPLs' maps at vpl_size; their bounces' (layers K_v on) in a corner of theirs at
+         * bounce_vpl_size, when the job makes it smaller: their light has scattered once more,
+         * and the pass's time is mostly the maps' fragments. */
+        struct rb_view_batch batch = {
+            .kind = RB_VIEW_KIND_PARABOLOID,
+            .output = RB_VIEW_OUTPUT_DEPTH,
+            .views = &b->vpl_views,
+            .view_count = b->vpl_count,
+            .targets = {&b->vpl_maps},
+            .depth = &b->vpl_depth,
+            .use_simplified = true,
+            .draws = &b->vpl_draws,
+        };
         rb_integrator_pass_begin(it, cmd, "vpl", vpl, COUNT(vpl));
-        rb_pass_view_record(d->views, cmd, frame, ctx->cur,
-                            &(struct rb_view_batch){
-                                .kind = RB_VIEW_KIND_PARABOLOID,
-                                .output = RB_VIEW_OUTPUT_DEPTH,
-                                .views = &b->vpl_views,
-                                .view_count = b->vpl_count * vpl_generations(b),
-                                .targets = {&b->vpl_maps},
-                                .depth = &b->vpl_depth,
-                                .use_simplified = true,
-                                .draws = &b->vpl_draws,
-                            });
+        rb_pass_view_record(d->views, cmd, frame, ctx->cur, &batch);
+        batch.first_view = batch.first_layer = b->vpl_count;
+        batch.view_count = b->vpl_count * (vpl_generations(b) - 1);
+        batch.size_px = b->bounce_vpl_size_px;
+        rb_pass_view_record(d->views, cmd, frame, ctx->cur, &batch);
         rb_integrator_pass_end(it, cmd);
     }
 

@@ -196,6 +196,8 @@ static const struct key keys[] = {
       "bdpt: reflective shadow map size in pixels (per cube face for point lights)"),
     K("integrator.bdpt.vpl_size", KT_UINT, JOB(integrator.bdpt.vpl_size_px), 16, 4096, "256", 0,
       "bdpt: VPL paraboloid shadow map size in pixels"),
+    K("integrator.bdpt.bounce_vpl_size", KT_UINT, JOB(integrator.bdpt.bounce_vpl_size_px), 0, 4096,
+      "0", 0, "bdpt: bounce VPLs' paraboloid shadow map size in pixels; 0: vpl_size"),
     K("integrator.bdpt.bundle_size", KT_UINT, JOB(integrator.bdpt.bundle_size_px), 16, 4096, "256",
       0, "bdpt: ray-bundle head-pointer image size in pixels"),
     K("integrator.bdpt.node_buffer_kib", KT_UINT, JOB(integrator.bdpt.node_buffer_kib), 1, 131072,
@@ -1311,6 +1313,10 @@ void rb_job_rehash(struct rb_job *job)
         h = h_u32(h, b->bundles);
         h = h_u32(h, b->rsm_size_px);
         h = h_u32(h, b->vpl_size_px);
+        /* only where it changes the maps: 0 and vpl_size and above draw them whole, and the
+         * jobs from before the key keep their hash */
+        if (b->bounce_vpl_size_px && b->bounce_vpl_size_px < b->vpl_size_px)
+            h = h_u32(h, b->bounce_vpl_size_px);
         h = h_u32(h, b->bundle_size_px);
         h = h_u32(h, b->node_buffer_kib); /* an overflowing buffer drops fragments */
         h = h_u32(h, b->interleave);

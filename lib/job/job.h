@@ -169,6 +169,8 @@ struct rb_job {
             enum rb_bdpt_hit_test hit_test;
             float hit_epsilon; /* equation (2)'s bound on the depth difference, in metres */
             enum rb_bdpt_samples samples;
+            uint32_t bounce_vpl_size_px; /* the bounce VPLs' maps, at most vpl_size_px; 0 (the
+                                          * default): vpl_size_px */
         } bdpt;
         struct rb_job_hybrid {
             uint32_t rays;             /* rays a lobe per pixel and frame, default 1 */

@@ -13,11 +13,13 @@
 #include "bdpt_filter.comp.h"
 #include "bdpt_gather.comp.h"
 #include "bdpt_generate.comp.h"
+#include "bdpt_mark.comp.h"
 #include "bdpt_reconstruct.comp.h"
 #include "bdpt_split.comp.h"
 
 struct rb_pass_bdpt {
-    struct rb_pass bounds, emitters, generate, bounce, split, connect, gather, filter, reconstruct;
+    struct rb_pass bounds, emitters, generate, bounce, split, mark, connect, gather, filter,
+        reconstruct;
 };
 
 static const struct rb_pass_binding bounds_bindings[] = {
@@ -82,12 +84,15 @@ static const struct rb_pass_binding split_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_SPLIT_OUT + 1, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_SPLIT_OUT + 2, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_SPLIT_OUT + 3, STORAGE_IMAGE),
-    RB_PASS_BIND(RB_BIND_BDPT_SPLIT_LIGHT + 0, STORAGE_IMAGE),
-    RB_PASS_BIND(RB_BIND_BDPT_SPLIT_LIGHT + 1, STORAGE_IMAGE),
-    RB_PASS_BIND(RB_BIND_BDPT_SPLIT_LIGHT + 2, STORAGE_IMAGE),
-    RB_PASS_BIND(RB_BIND_BDPT_SPLIT_LIGHT + 3, STORAGE_IMAGE),
 };
 _Static_assert(COUNT(split_bindings) == RB_BIND_BDPT_SPLIT_COUNT, "split bindings");
+
+static const struct rb_pass_binding mark_bindings[] = {
+    RB_PASS_BIND(RB_BIND_BDPT_MARK_POSITION, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_MARK_BUNDLE_VIEWS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_MARK_HEADS, STORAGE_IMAGE),
+};
+_Static_assert(COUNT(mark_bindings) == RB_BIND_BDPT_MARK_COUNT, "mark bindings");
 
 static const struct rb_pass_binding connect_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_CONNECT_GLOBALS, UNIFORM_BUFFER),
@@ -183,6 +188,8 @@ enum rb_status rb_pass_bdpt_create(struct rb_gpu *gpu, struct rb_pass_bdpt **out
         (st = COMPUTE(bounce, "bounce", bounce_bindings, sizeof(struct rb_gpu_bdpt_bounce_push),
                       rb_spv_bdpt_bounce_comp)) ||
         (st = COMPUTE(split, "split", split_bindings, image_push, rb_spv_bdpt_split_comp)) ||
+        (st = COMPUTE(mark, "mark", mark_bindings, sizeof(struct rb_gpu_bdpt_mark_push),
+                      rb_spv_bdpt_mark_comp)) ||
         (st = COMPUTE(connect, "connect", connect_bindings, sizeof(struct rb_gpu_bdpt_connect_push),
                       rb_spv_bdpt_connect_comp)) ||
         (st = COMPUTE(gather, "gather", gather_bindings, image_push, rb_spv_bdpt_gather_comp)) ||
@@ -204,6 +211,7 @@ void rb_pass_bdpt_destroy(struct rb_pass_bdpt *p)
     rb_pass_release(&p->filter);
     rb_pass_release(&p->gather);
     rb_pass_release(&p->connect);
+    rb_pass_release(&p->mark);
     rb_pass_release(&p->split);
     rb_pass_release(&p->bounce);
     rb_pass_release(&p->generate);
@@ -259,7 +267,8 @@ void rb_pass_bdpt_bounds_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                        VK_NULL_HANDLE);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_BOUNDS_OUT, &b->bounds);
     rb_pass_record_bindings(cmd, &bind);
-    vkCmdDispatch(cmd, groups(frame->width_px, 8), groups(frame->height_px, 8), 1);
+    vkCmdDispatch(cmd, groups(frame->width_px, RB_BDPT_BOUNDS_TILE_PX),
+                  groups(frame->height_px, RB_BDPT_BOUNDS_TILE_PX), 1);
 }
 
 void rb_pass_bdpt_emitters_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
@@ -357,12 +366,40 @@ void rb_pass_bdpt_split_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     rb_pass_bind_image(&bind, RB_BIND_BDPT_SPLIT_GB_MOTION, gb[RB_GB_MOTION].view, VK_NULL_HANDLE);
     for (uint32_t i = 0; i < RB_BDPT_SPLIT_COUNT; i++)
         rb_pass_bind_image(&bind, RB_BIND_BDPT_SPLIT_OUT + i, b->split[i].view, VK_NULL_HANDLE);
-    for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
-        rb_pass_bind_image(&bind, RB_BIND_BDPT_SPLIT_LIGHT + i, b->accum[i].view, VK_NULL_HANDLE);
     rb_pass_record_bindings(cmd, &bind);
+    /* The accumulators start at zero: a clear, after whatever read them, before connect. */
+    rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                          VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
+                          VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    VkClearColorValue zero = {.float32 = {0.0f, 0.0f, 0.0f, 0.0f}};
+    VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+    for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
+        vkCmdClearColorImage(cmd, b->accum[i].image, VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+    rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                          VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_STORAGE_READ_BIT |
+                              VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
     struct rb_gpu_bdpt_image_push pc = image_push(b);
     push(cmd, &p->split, &pc, sizeof(pc));
     vkCmdDispatch(cmd, groups(b->split[0].width_px, 8), groups(b->split[0].height_px, 8), 1);
+}
+
+void rb_pass_bdpt_mark_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                              const struct rb_bdpt_frame *b, uint32_t k)
+{
+    struct rb_pass_bindings bind = {.pass = &p->mark};
+    rb_pass_bind_image(&bind, RB_BIND_BDPT_MARK_POSITION, b->split[0].view, VK_NULL_HANDLE);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_MARK_BUNDLE_VIEWS, &b->bundle_views);
+    rb_pass_bind_image(&bind, RB_BIND_BDPT_MARK_HEADS, b->bundle.heads.view, VK_NULL_HANDLE);
+    rb_pass_record_bindings(cmd, &bind);
+    uint32_t n = b->interleave, s = k % (n * n);
+    struct rb_gpu_bdpt_mark_push pc = {
+        .index = {k, b->bundle_size_px, 0, 0},
+        .region = {(s % n) * b->sub_width_px, (s / n) * b->sub_height_px, b->sub_width_px,
+                   b->sub_height_px},
+    };
+    push(cmd, &p->mark, &pc, sizeof(pc));
+    vkCmdDispatch(cmd, groups(b->sub_width_px, 8), groups(b->sub_height_px, 8), 1);
 }
 
 /* How many of the iterations k < limit land on sub-image s of count: those with k mod count
@@ -409,7 +446,8 @@ void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
         .params = {b->vpl_bias, (float)b->vpl_size_px, (float)b->bundle_size_px,
                    (float)b->bundle.capacity_nodes},
         .bounce = {b->has_bounce && k < b->vpl_count ? b->vpl_count + k : RB_NONE,
-                   b->has_chain && k < b->vpl_count ? 2 * b->vpl_count + k : RB_NONE, 0, 0},
+                   b->has_chain && k < b->vpl_count ? 2 * b->vpl_count + k : RB_NONE,
+                   b->bounce_vpl_size_px, 0},
     };
     push(cmd, &p->connect, &pc, sizeof(pc));
     vkCmdDispatch(cmd, groups(b->sub_width_px, 8), groups(b->sub_height_px, 8), 1);

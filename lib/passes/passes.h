@@ -209,10 +209,17 @@ struct rb_view_batch {
     const struct rb_gpu_image *targets[RB_VIEW_RSM_TARGETS]; /* depth: [0], R32F; rsm: in
                                                               * rb_view_rsm_formats; arrays
                                                               * with layer views, in
-                                                              * VK_IMAGE_LAYOUT_GENERAL */
+                                                              * VK_IMAGE_LAYOUT_GENERAL; rsm:
+                                                              * NULL after [0] drops that
+                                                              * output */
     const struct rb_gpu_image *depth; /* depth, rsm: D32 scratch at least the targets' size,
                                        * reused by every view of the batch */
     const struct rb_view_list *list;  /* list: its heads have the layers */
+    uint32_t size_px; /* depth, rsm: draw into the size_px x size_px corner of each layer;
+                       * 0: the whole layer */
+    /* list: the caller cleared the heads and the counter (rb_view_list_clear), the heads to
+     * RB_VIEW_LIST_SKIP but for the texels it will read, which get lists alone */
+    bool has_marked_heads;
     float intensity[3]; /* rsm: radiant intensity in W/sr (perspective) or irradiance in W/m^2
                          * across the beam (orthographic) of the light the view looks from */
 
@@ -269,6 +276,10 @@ void rb_view_paraboloid(struct rb_gpu_view *out, struct rb_vec3 eye, struct rb_v
 enum rb_status rb_view_list_init(struct rb_gpu *gpu, const struct rb_view_list_desc *desc,
                                  struct rb_view_list *out, struct rb_err *err);
 void rb_view_list_release(struct rb_gpu *gpu, struct rb_view_list *list);
+/* Empties layers first_layer.. of the list's heads to head (RB_NONE: empty lists) and its pool,
+ * after whatever read them, before the stages in dst_stage (transfer writes). */
+void rb_view_list_clear(VkCommandBuffer cmd, const struct rb_view_list *list, uint32_t first_layer,
+                        uint32_t count, uint32_t head, VkPipelineStageFlags2 dst_stage);
 /* After the submit that recorded a list batch: its counters (requested, dropped). */
 struct rb_gpu_list_counter rb_view_list_usage(const struct rb_view_list *list);
 /* After that submit: RB_E_NOMEM, with the numbers and name in the message, when fragments found
@@ -327,6 +338,7 @@ struct rb_bdpt_frame {
     uint32_t interleave;                  /* n: n x n sub-images */
     uint32_t sub_width_px, sub_height_px; /* a sub-image: the frame's size / n, rounded up */
     uint32_t vpl_size_px, bundle_size_px;
+    uint32_t bounce_vpl_size_px; /* the bounce VPLs' maps: a corner of their vpl_maps layers */
     uint32_t filter_radius_px;
     float filter_depth, filter_normal;
     float clamp_g;  /* the bound on G of a VPL connection, in 1/m^2; 0: none */
@@ -399,9 +411,13 @@ void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
  * VPLs K_v + i. */
 void rb_pass_bdpt_bounce_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                 const struct rb_bdpt_frame *b, uint32_t round);
-/* The G-buffer into n x n sub-images (b->split); zeroes b->accum. */
+/* The G-buffer into n x n sub-images (b->split); clears b->accum to zero. */
 void rb_pass_bdpt_split_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                const struct rb_bdpt_frame *b);
+/* Bundle k's heads (layer 0 of b->bundle, cleared to RB_VIEW_LIST_SKIP): RB_NONE where a point
+ * of sub-image k mod n^2 lands, the texels its connect pass reads. */
+void rb_pass_bdpt_mark_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                              const struct rb_bdpt_frame *b, uint32_t k);
 /* Iteration k: VPL k and bundle k (in b->bundle's list) with sub-image k mod n^2, added to
  * b->accum. */
 void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,

@@ -229,22 +229,22 @@ static void depth_barrier(VkCommandBuffer cmd, const struct rb_gpu_image *depth)
                                                    .pImageMemoryBarriers = &b});
 }
 
-/* A list batch starts from empty heads on its layers and an empty pool. */
-static void clear_list(VkCommandBuffer cmd, const struct rb_view_list *list, uint32_t first_layer,
-                       uint32_t count)
+/* A list batch starts from empty heads on its layers and an empty pool (or, for a batch with
+ * marked heads, heads that take no fragments but where marked). */
+void rb_view_list_clear(VkCommandBuffer cmd, const struct rb_view_list *list, uint32_t first_layer,
+                        uint32_t count, uint32_t head, VkPipelineStageFlags2 dst_stage)
 {
     /* Whatever read the last batch's lists is done before they are cleared. */
     rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
                           VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
                           VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
     vkCmdFillBuffer(cmd, list->counter.buffer, 0, sizeof(struct rb_gpu_list_counter), 0);
-    VkClearColorValue none = {.uint32 = {RB_NONE, RB_NONE, RB_NONE, RB_NONE}};
+    VkClearColorValue value = {.uint32 = {head, head, head, head}};
     VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, first_layer, count};
-    vkCmdClearColorImage(cmd, list->heads.image, VK_IMAGE_LAYOUT_GENERAL, &none, 1, &range);
-    rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                          VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
-                          VK_ACCESS_2_SHADER_STORAGE_READ_BIT |
-                              VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+    vkCmdClearColorImage(cmd, list->heads.image, VK_IMAGE_LAYOUT_GENERAL, &value, 1, &range);
+    rb_gpu_memory_barrier(
+        cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, dst_stage,
+        VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
 }
 
 void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const struct rb_frame *frame,
@@ -273,6 +273,12 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
         width = t->width_px;
         height = t->height_px;
         layers = t->layer_count;
+        if (batch->size_px) {
+            if (batch->size_px > width || batch->size_px > height)
+                RB_BUG("raster view: a corner of %u px in %ux%u targets", batch->size_px, width,
+                       height);
+            width = height = batch->size_px;
+        }
         if (!t->layer_views || batch->depth->width_px < width || batch->depth->height_px < height)
             RB_BUG("raster view: targets need layer views and a depth image as large");
     }
@@ -299,7 +305,9 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
         put_image(&w, RB_VIEW_BIND_HEADS, batch->list->heads.view, VK_NULL_HANDLE);
         put_buffer(&w, RB_VIEW_BIND_NODES, &batch->list->nodes);
         put_buffer(&w, RB_VIEW_BIND_COUNTER, &batch->list->counter);
-        clear_list(cmd, batch->list, batch->first_layer, batch->view_count);
+        if (!batch->has_marked_heads)
+            rb_view_list_clear(cmd, batch->list, batch->first_layer, batch->view_count, RB_NONE,
+                               VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT);
     }
 
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
@@ -321,7 +329,8 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
         for (uint32_t c = 0; c < color_count; c++)
             colors[c] = (VkRenderingAttachmentInfo){
                 .sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
-                .imageView = batch->targets[c]->layer_views[layer],
+                .imageView =
+                    batch->targets[c] ? batch->targets[c]->layer_views[layer] : VK_NULL_HANDLE,
                 .imageLayout = VK_IMAGE_LAYOUT_GENERAL,
                 .loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
                 .storeOp = VK_ATTACHMENT_STORE_OP_STORE,

@@ -85,6 +85,15 @@ struct rb_gpu_bdpt_generate_push {
                         * (W, as write_lights weighs them), the emissive triangles' count */
 };
 
+/* The pixels across one workgroup of bdpt_bounds.comp (8 x 8 invocations, 4 x 4 pixels each). */
+#define RB_BDPT_BOUNDS_TILE_PX 32
+
+/* Push constants of bdpt_mark.comp: bundle k and its sub-image. */
+struct rb_gpu_bdpt_mark_push {
+    RB_UVEC4(index);  /* bundle k, the bundle grid size, 0, 0 */
+    RB_UVEC4(region); /* the sub-image's first texel in the split images (x, y), its size */
+};
+
 /* Push constants of bdpt_connect.comp: one iteration of the loop, over one sub-image. */
 struct rb_gpu_bdpt_connect_push {
     RB_UVEC4(index);   /* iteration k, whether VPL k exists (0/1), whether bundle k does, the
@@ -94,7 +103,8 @@ struct rb_gpu_bdpt_connect_push {
                         * floats); the G clamp (0: none) */
     RB_VEC4(params);   /* VPL bias, VPL map size, bundle grid size, node capacity */
     RB_UVEC4(bounce);  /* x: the index of VPL k's bounce (K_v + k), or RB_NONE where the frame
-                        * has none; y: its bounce's (2 K_v + k), or RB_NONE; z, w: unused */
+                        * has none; y: its bounce's (2 K_v + k), or RB_NONE; z: the bounce
+                        * VPLs' map size (the corner of their layers they fill); w: unused */
 };
 
 /* Push constants of bdpt_emitters.comp. */

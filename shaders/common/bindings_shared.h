@@ -108,8 +108,13 @@
 #define RB_BIND_BDPT_SPLIT_GB_EMISSION 3
 #define RB_BIND_BDPT_SPLIT_GB_MOTION 4
 #define RB_BIND_BDPT_SPLIT_OUT 5 /* written: 4 images from here on */
-#define RB_BIND_BDPT_SPLIT_LIGHT 9 /* written (zeroed): RB_BDPT_LIGHT_COUNT accumulators */
-#define RB_BIND_BDPT_SPLIT_COUNT 13
+#define RB_BIND_BDPT_SPLIT_COUNT 9
+
+/* bdpt_mark.comp: the texels of bundle k that sub-image k mod n^2 reads */
+#define RB_BIND_BDPT_MARK_POSITION 0     /* the split position image */
+#define RB_BIND_BDPT_MARK_BUNDLE_VIEWS 1
+#define RB_BIND_BDPT_MARK_HEADS 2        /* written: RB_NONE where a point of the sub-image lands */
+#define RB_BIND_BDPT_MARK_COUNT 3
 
 /* bdpt_connect.comp: one iteration's connections over one sub-image */
 #define RB_BIND_BDPT_CONNECT_GLOBALS 0

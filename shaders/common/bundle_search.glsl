@@ -40,8 +40,7 @@ rb_bundle_hit rb_bundle_search(rb_gpu_view v, int size, uint capacity, vec3 x1, 
 {
     rb_bundle_hit h;
     h.found = false;
-    vec2 ndc = (v.transform * vec4(x1, 1.0)).xy;
-    ivec2 t = ivec2(floor((ndc * 0.5 + 0.5) * float(size)));
+    ivec2 t = rb_bundle_texel(v, size, x1);
     if (any(lessThan(t, ivec2(0))) || any(greaterThanEqual(t, ivec2(size))))
         return h; // outside the fitted grid: cannot happen for a visible x1 (generate)
     float key = s * rb_view_depth(v, RB_VIEW_ORTHOGRAPHIC, x1);

@@ -13,6 +13,15 @@ float rb_view_depth(rb_gpu_view v, uint kind, vec3 p)
     return length(p - v.origin.xyz);
 }
 
+// x1's texel of the size x size grid of bundle v (an orthographic view); outside the grid when
+// x1 is. rb_bundle_search reads the texel this gives, and bdpt_mark.comp marks it beforehand:
+// one function, so that both find the same texel.
+ivec2 rb_bundle_texel(rb_gpu_view v, int size, vec3 x1)
+{
+    vec2 ndc = (v.transform * vec4(x1, 1.0)).xy;
+    return ivec2(floor((ndc * 0.5 + 0.5) * float(size)));
+}
+
 // A unit vector as polar angles, 16 bits each (seed 000, B.2): theta = acos(z) in [0, pi] in the
 // low half, phi = atan(y, x) in [-pi, pi] (0 at the poles) in the high half, both rounded to the
 // nearest step.

@@ -30,6 +30,10 @@
 #define RB_VIEW_BIND_COUNTER 7         /* rb_gpu_list_counter (list) */
 #define RB_VIEW_BIND_COUNT 8
 
+/* A list head that takes no fragments: a batch whose caller cleared the heads to this and marked
+ * the texels it reads RB_NONE (struct rb_view_batch's has_marked_heads) lists those alone. */
+#define RB_VIEW_LIST_SKIP 0xfffffffeu
+
 /* Paraboloid views tessellate each triangle so that no projected sub-edge is longer than this
  * many texels (while the level stays under RB_VIEW_TESS_MAX_LEVEL); view.c derives the edge
  * error this leaves: C^2 / (2 size), half a texel of a 256^2 map. */

@@ -44,16 +44,17 @@ check "1 and 2 threads give identical bits" cmp -s "$T/t1/frame.0000.exr" "$T/t2
 check "1 and 4 threads give identical bits" cmp -s "$T/t1/frame.0000.exr" "$T/t4/frame.0000.exr"
 check "a second run gives identical bits" cmp -s "$T/t1/frame.0000.exr" "$T/b/frame.0000.exr"
 
-# Overflow: never silent (without -q, which silences warnings).
+# Overflow: never silent (without -q, which silences warnings). A bundle lists only the texels
+# its connect pass searches, at most 197 nodes here: 1 KiB holds 51.
 rb render jobs/demo.yaml --frames 0 --size 64x36 $maps --integrator bdpt --out "$T/o" \
-    --set integrator.bdpt.node_buffer_kib=4
+    --set integrator.bdpt.node_buffer_kib=1
 expect_exit 0 "a tiny node buffer still renders"
 stderr_has "the ray-bundle node buffer overflowed" "a tiny node buffer is a warning"
-stderr_has "the buffer holds 204 (4 KiB)" "the warning gives the counts"
+stderr_has "the buffer holds 51 (1 KiB)" "the warning gives the counts"
 check "the sidecar flags the overflow" \
-    grep -q '"capacity": 204, "dropped": [1-9][0-9]*, "overflow": true' "$T/o/frame.0000.timing.json"
+    grep -q '"capacity": 51, "dropped": [1-9][0-9]*, "overflow": true' "$T/o/frame.0000.timing.json"
 rb render jobs/demo.yaml $small $maps --integrator bdpt --out "$T/s" \
-    --set integrator.bdpt.node_buffer_kib=4 --strict
+    --set integrator.bdpt.node_buffer_kib=1 --strict
 expect_exit 1 "--strict makes an overflow exit 1"
 stderr_has "--strict makes that an error" "--strict says why"
 check "--strict writes nothing of the failed frame" test ! -e "$T/s/frame.0000.exr"

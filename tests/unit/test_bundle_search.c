@@ -5,11 +5,11 @@
  * $RB_SCENES/cornell-box/CornellBox.glb (skipped when absent). On lavapipe, validation on.
  * - The bundles are bdpt's own: the bdpt integrator renders a frame (160 x 90, one VPL, the
  *   job's other bdpt settings but view_triangles 0, so that its lists hold the full mesh, the
- *   one Embree gets) with k + 1 bundles, for k < BUNDLES: its last bundle's lists are left for
- *   bundle_probe.comp (rb_integrator_bdpt_frame), which starts the search from every G-buffer
- *   point x1 as connect does (x1's texel and depth, s the side of x1's geometric normal, d the
- *   bundle's direction: bdpt's k-th), with s and with -s. Every k + 1 renders the same first
- *   k bundles: k is the new direction.
+ *   one Embree gets, and one sub-image and one cache, so that they are there for every pixel) with
+ * k + 1 bundles, for k < BUNDLES: its last bundle's lists are left for bundle_probe.comp
+ * (rb_integrator_bdpt_frame), which starts the search from every G-buffer point x1 as connect does
+ * (x1's texel and depth, s the side of x1's geometric normal, d the bundle's direction: bdpt's
+ * k-th), with s and with -s. Every k + 1 renders the same first k bundles: k is the new direction.
  * - Embree casts the line the lists sampled for x1: through its texel's centre (the rasterizer's
  *   sample), along s d, from x1's depth plus half a texel (where the search starts), against the
  *   same posed triangles (rb_scene_deform), keeping the nearest that faces the line's origin, as
@@ -400,6 +400,11 @@ static void check_scene(const char *name, const char *path, int frame_index)
         {"integrator.name", "bdpt", NULL},
         {"integrator.bdpt.vpls", "1", NULL},
         {"integrator.bdpt.view_triangles", "0", NULL},
+        /* bdpt lists a bundle only at the texels its connect pass searches (bdpt_mark.comp):
+         * one sub-image of the G-buffer the caches share, so that it lists them for every
+         * point of the frame's own G-buffer, where the probe searches */
+        {"integrator.bdpt.interleave", "1", NULL},
+        {"integrator.bdpt.caches", "1", NULL},
     };
     if (rb_gpu_create(&(struct rb_gpu_desc){.validate = true}, &gpu, &err) ||
         rb_job_load(path, o, COUNT(o), &job, &err) ||
