@@ -176,6 +176,23 @@ enum rb_status rb_analysis_mann_whitney(const double *a, size_t a_count, const d
                                         size_t b_count, enum rb_analysis_mwu_method method,
                                         struct rb_analysis_mwu *out, struct rb_err *err);
 
+/* The one-sided Wilcoxon signed-rank test that the differences d (paired: test minus base) lie
+ * above zero. Zero differences are dropped (Wilcoxon's rule); the others are ranked by |d| with
+ * midranks for ties; W+ is the sum of the positive ones' ranks. p = P(W+ >= observed) over the
+ * 2^n equally likely signs: counted exactly (doubled midranks are integers, so ties are exact
+ * too) for n <= RB_ANALYSIS_WILCOXON_EXACT_MAX, else the normal approximation with the tie and
+ * continuity corrections. With no non-zero difference p = 1. Fails with RB_E_INVALID for a NaN,
+ * RB_E_NOMEM. The same inputs give the same bits. */
+#define RB_ANALYSIS_WILCOXON_EXACT_MAX 400
+struct rb_analysis_wilcoxon {
+    double w_plus; /* the statistic */
+    double p;      /* one-sided, test > base */
+    size_t count;  /* the non-zero differences */
+    bool is_exact; /* counted, not approximated */
+};
+enum rb_status rb_analysis_wilcoxon_greater(const double *d, size_t n,
+                                            struct rb_analysis_wilcoxon *out, struct rb_err *err);
+
 /* The smallest two-sided p-value the exact test can give for samples of these sizes:
  * 2 / C(a_count + b_count, a_count), at most 1 (1 when either is empty). A verdict needs it to be
  * below alpha: 3 runs against 3 can never show a difference at alpha 0.05 (0.1), 4 against 4 can
@@ -373,6 +390,31 @@ enum rb_status rb_analysis_flicker_create(const struct rb_analysis_flicker_desc 
                                           struct rb_analysis_flicker **out, struct rb_err *err);
 /* Frees f and what it owns; NULL is fine. */
 void rb_analysis_flicker_destroy(struct rb_analysis_flicker *f);
+
+/* A gate for CI without a reference: does seq flicker more than base, the same job rendered
+ * before a change? The frames both have a warped temporal error for are paired by number;
+ * the one-sided Wilcoxon signed-rank test of seq's errors against base's, both ways, decides
+ * with the effect, the ratio of their means: MORE when seq's are higher with p < alpha and
+ * their mean exceeds base's by more than min_effect (a fraction), LESS the other way, SAME
+ * otherwise. Fewer than RB_ANALYSIS_FLICKER_GATE_MIN_PAIRS pairs cannot decide: RB_E_INVALID,
+ * as are sequences of different sizes. */
+#define RB_ANALYSIS_FLICKER_GATE_MIN_PAIRS 6
+enum rb_analysis_flicker_verdict {
+    RB_ANALYSIS_FLICKER_SAME = 0,
+    RB_ANALYSIS_FLICKER_MORE,
+    RB_ANALYSIS_FLICKER_LESS,
+};
+struct rb_analysis_flicker_gate {
+    size_t pair_count;
+    double mean, base_mean; /* of the warped temporal error over the paired frames */
+    double effect;          /* mean / base_mean - 1; 0 when both are 0, inf when only base's is */
+    struct rb_analysis_wilcoxon more, less; /* seq > base, and base > seq */
+    enum rb_analysis_flicker_verdict verdict;
+};
+enum rb_status rb_analysis_flicker_gate(const struct rb_analysis_flicker *seq,
+                                        const struct rb_analysis_flicker *base, double alpha,
+                                        double min_effect, struct rb_analysis_flicker_gate *out,
+                                        struct rb_err *err);
 
 /* ---- report (report.c) ------------------------------------------------------------------ */
 

@@ -385,3 +385,60 @@ fail:
     rb_analysis_flicker_destroy(f);
     return st;
 }
+
+enum rb_status rb_analysis_flicker_gate(const struct rb_analysis_flicker *seq,
+                                        const struct rb_analysis_flicker *base, double alpha,
+                                        double min_effect, struct rb_analysis_flicker_gate *out,
+                                        struct rb_err *err)
+{
+    *out = (struct rb_analysis_flicker_gate){.mean = NAN, .base_mean = NAN, .effect = NAN};
+    if (seq->width_px != base->width_px || seq->height_px != base->height_px)
+        return rb_errf(err, RB_E_INVALID,
+                       "flicker: the sequence is %ux%u and the baseline %ux%u: not one job's",
+                       seq->width_px, seq->height_px, base->width_px, base->height_px);
+    size_t n = seq->seq.frame_count;
+    double *d = malloc((n ? n : 1) * 2 * sizeof(*d));
+    if (!d)
+        return rb_errf(err, RB_E_NOMEM, "flicker: out of memory");
+    double *neg = d + n, sum = 0.0, base_sum = 0.0;
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        const struct rb_analysis_flicker_frame *a = &seq->frames[i];
+        long k = rb_analysis_sequence_find(&base->seq, a->frame);
+        if (k < 0 || !isfinite(a->seq.warped_error))
+            continue;
+        const struct rb_analysis_flicker_frame *b = &base->frames[k];
+        if (!isfinite(b->seq.warped_error))
+            continue;
+        d[m] = a->seq.warped_error - b->seq.warped_error;
+        neg[m] = -d[m];
+        sum += a->seq.warped_error;
+        base_sum += b->seq.warped_error;
+        m++;
+    }
+    out->pair_count = m;
+    enum rb_status st = RB_OK;
+    if (m < RB_ANALYSIS_FLICKER_GATE_MIN_PAIRS) {
+        st = rb_errf(err, RB_E_INVALID,
+                     "flicker: %zu frame%s of the sequence and the baseline %s a warped temporal "
+                     "error (a frame and the one before it); the gate needs at least %d",
+                     m, m == 1 ? "" : "s", m == 1 ? "has" : "have",
+                     RB_ANALYSIS_FLICKER_GATE_MIN_PAIRS);
+        goto out;
+    }
+    out->mean = sum / (double)m;
+    out->base_mean = base_sum / (double)m;
+    out->effect = out->base_mean > 0.0 ? out->mean / out->base_mean - 1.0
+                  : out->mean > 0.0    ? INFINITY
+                                       : 0.0;
+    if ((st = rb_analysis_wilcoxon_greater(d, m, &out->more, err)) ||
+        (st = rb_analysis_wilcoxon_greater(neg, m, &out->less, err)))
+        goto out;
+    if (out->more.p < alpha && out->effect > min_effect)
+        out->verdict = RB_ANALYSIS_FLICKER_MORE;
+    else if (out->less.p < alpha && out->effect < -min_effect)
+        out->verdict = RB_ANALYSIS_FLICKER_LESS;
+out:
+    free(d);
+    return st;
+}

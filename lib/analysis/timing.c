@@ -132,6 +132,93 @@ enum rb_status rb_analysis_mann_whitney(const double *a, size_t a_count, const d
     return RB_OK;
 }
 
+static int cmp_abs(const void *pa, const void *pb)
+{
+    double a = fabs(*(const double *)pa), b = fabs(*(const double *)pb);
+    return (a > b) - (a < b);
+}
+
+enum rb_status rb_analysis_wilcoxon_greater(const double *d, size_t n,
+                                            struct rb_analysis_wilcoxon *out, struct rb_err *err)
+{
+    *out = (struct rb_analysis_wilcoxon){.p = 1.0, .is_exact = true};
+    double *v = malloc((n ? n : 1) * sizeof(*v));
+    if (!v)
+        return rb_errf(err, RB_E_NOMEM, "wilcoxon: out of memory");
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (isnan(d[i])) {
+            free(v);
+            return rb_errf(err, RB_E_INVALID, "wilcoxon: difference %zu is NaN", i + 1);
+        }
+        if (d[i] != 0.0)
+            v[m++] = d[i];
+    }
+    out->count = m;
+    if (!m) {
+        free(v);
+        return RB_OK;
+    }
+    qsort(v, m, sizeof(*v), cmp_abs);
+    /* Doubled midranks (integers): a group of t tied |d| at ranks i+1..i+t gets 2i + t + 1. */
+    uint64_t *rank2 = malloc(m * sizeof(*rank2));
+    if (!rank2) {
+        free(v);
+        return rb_errf(err, RB_E_NOMEM, "wilcoxon: out of memory");
+    }
+    uint64_t w2 = 0, total2 = 0;
+    double tie_term = 0.0;
+    for (size_t i = 0; i < m;) {
+        size_t j = i + 1;
+        while (j < m && fabs(v[j]) == fabs(v[i]))
+            j++;
+        for (size_t k = i; k < j; k++) {
+            rank2[k] = 2 * i + (j - i) + 1;
+            total2 += rank2[k];
+            if (v[k] > 0.0)
+                w2 += rank2[k];
+        }
+        double t = (double)(j - i);
+        tie_term += t * t * t - t;
+        i = j;
+    }
+    free(v);
+    out->w_plus = (double)w2 / 2.0;
+    double mm = (double)m;
+    if (m <= RB_ANALYSIS_WILCOXON_EXACT_MAX) {
+        /* count[s]: sign choices whose positive ranks sum to s (doubled), as a share of them,
+         * halved at each step so that nothing overflows. */
+        double *count = calloc(total2 + 1, sizeof(*count));
+        if (!count) {
+            free(rank2);
+            return rb_errf(err, RB_E_NOMEM, "wilcoxon: out of memory");
+        }
+        count[0] = 1.0;
+        uint64_t reach = 0;
+        for (size_t k = 0; k < m; k++) {
+            for (uint64_t s = reach + 1; s-- > 0;)
+                if (count[s] != 0.0) {
+                    count[s + rank2[k]] += count[s] * 0.5;
+                    count[s] *= 0.5;
+                }
+            reach += rank2[k];
+        }
+        double tail = 0.0;
+        for (uint64_t s = total2 + 1; s-- > w2;)
+            tail += count[s];
+        free(count);
+        out->p = tail > 1.0 ? 1.0 : tail;
+    } else {
+        double mean = mm * (mm + 1.0) / 4.0;
+        double var = mm * (mm + 1.0) * (2.0 * mm + 1.0) / 24.0 - tie_term / 48.0;
+        double z = var > 0.0 ? (out->w_plus - mean - 0.5) / sqrt(var) : -INFINITY;
+        out->p = 0.5 * erfc(z / sqrt(2.0));
+        out->is_exact = false;
+    }
+    free(rank2);
+    return RB_OK;
+}
+
 double rb_analysis_mwu_min_p(size_t a_count, size_t b_count)
 {
     if (!a_count || !b_count)

@@ -124,6 +124,65 @@ static void test_bad_input(void **state)
 }
 
 /* 2 / C(n1 + n2, n1): 3 against 3 can never reach 0.05, 4 against 4 can. */
+/* The one-sided signed-rank test against distributions counted by hand: p = P(W+ >= observed)
+ * over the 2^n signs, zeros dropped, ties as midranks; the normal approximation past the exact
+ * limit. */
+static void test_wilcoxon(void **state)
+{
+    (void)state;
+    struct rb_err err = RB_ERR_INIT;
+    struct rb_analysis_wilcoxon w;
+    const double up[8] = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8};
+    assert_int_equal(rb_analysis_wilcoxon_greater(up, 8, &w, &err), RB_OK);
+    assert_true(w.is_exact);
+    assert_int_equal(w.count, 8);
+    assert_true(w.w_plus == 36.0);
+    assert_true(w.p == 1.0 / 256.0); /* only every sign positive reaches 36 */
+    /* ranks 1..5, W+ = 1 + 3 + 4 + 5 = 13: the subsets of {1..5} summing to 13 or more are the
+     * complements of {}, {1} and {2}: 3 of 32 */
+    const double mixed[5] = {1.0, -2.0, 3.0, 4.0, 5.0};
+    assert_int_equal(rb_analysis_wilcoxon_greater(mixed, 5, &w, &err), RB_OK);
+    assert_true(w.w_plus == 13.0);
+    assert_true(fabs(w.p - 3.0 / 32.0) < 1e-15);
+    /* zeros are dropped: two positive differences left, p = 1/4 */
+    const double zeros[4] = {0.0, 0.0, 1.0, 2.0};
+    assert_int_equal(rb_analysis_wilcoxon_greater(zeros, 4, &w, &err), RB_OK);
+    assert_int_equal(w.count, 2);
+    assert_true(w.p == 0.25);
+    /* three tied |d|, midrank 2 each, two positive: W+ = 4, reached by 4 of 8 sign choices */
+    const double ties[3] = {1.0, 1.0, -1.0};
+    assert_int_equal(rb_analysis_wilcoxon_greater(ties, 3, &w, &err), RB_OK);
+    assert_true(w.w_plus == 4.0);
+    assert_true(w.p == 0.5);
+    /* all negative: W+ = 0, which every sign choice reaches */
+    const double down[5] = {-1.0, -2.0, -3.0, -4.0, -5.0};
+    assert_int_equal(rb_analysis_wilcoxon_greater(down, 5, &w, &err), RB_OK);
+    assert_true(w.p == 1.0);
+    /* nothing but zeros: nothing to test */
+    assert_int_equal(rb_analysis_wilcoxon_greater(zeros, 2, &w, &err), RB_OK);
+    assert_int_equal(w.count, 0);
+    assert_true(w.p == 1.0);
+    /* past the exact limit: the normal approximation, which agrees with counting where both
+     * apply (a shift of half the spread: p far below any alpha) */
+    enum { N = RB_ANALYSIS_WILCOXON_EXACT_MAX + 100 };
+    double *many = malloc(N * sizeof(*many));
+    assert_non_null(many);
+    for (int i = 0; i < N; i++)
+        many[i] = (i % 3 == 0 ? -1.0 : 1.0) * (double)(i + 1);
+    assert_int_equal(rb_analysis_wilcoxon_greater(many, N, &w, &err), RB_OK);
+    assert_false(w.is_exact);
+    assert_true(w.p < 1e-6);
+    struct rb_analysis_wilcoxon exact;
+    assert_int_equal(
+        rb_analysis_wilcoxon_greater(many, RB_ANALYSIS_WILCOXON_EXACT_MAX, &exact, &err), RB_OK);
+    assert_true(exact.is_exact);
+    assert_true(exact.p < 1e-4);
+    free(many);
+    const double bad[2] = {1.0, NAN};
+    assert_int_equal(rb_analysis_wilcoxon_greater(bad, 2, &w, &err), RB_E_INVALID);
+    assert_non_null(strstr(err.msg, "difference 2 is NaN"));
+}
+
 static void test_min_p(void **state)
 {
     (void)state;
@@ -442,7 +501,7 @@ int main(void)
         cmocka_unit_test(test_min_p),          cmocka_unit_test(test_false_positive_rate),
         cmocka_unit_test(test_shift_detected), cmocka_unit_test(test_verdict),
         cmocka_unit_test(test_set_load),       cmocka_unit_test(test_sets_compare),
-        cmocka_unit_test(test_set_errors),
+        cmocka_unit_test(test_set_errors),     cmocka_unit_test(test_wilcoxon),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }
