@@ -663,6 +663,18 @@ static bool on_reference_pass(void *user, uint32_t done, uint32_t total)
     return !interrupted;
 }
 
+/* A failed write into a folder removed during the run is reported as the removal, its cause. */
+static enum rb_status removed_first(const struct rb_io_output_lock *lock, enum rb_status st,
+                                    struct rb_err *err)
+{
+    struct rb_err gone = RB_ERR_INIT;
+    if (lock && rb_io_output_lock_check(lock, &gone)) {
+        *err = gone;
+        return RB_E_IO;
+    }
+    return st;
+}
+
 /* Renders the job once as o says; bench, when not NULL, gets what was rendered and the
  * closing line is left to the caller. */
 static int render_job(struct options *o, struct cmd_bench_run *bench)
@@ -682,6 +694,7 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
     struct rb_scene *scene = NULL;
     struct rb_scene_setup setup;
     struct rb_render *r = NULL;
+    struct rb_io_output_lock *lock = NULL;
     float *env = NULL;
     uint32_t env_w = 0, env_h = 0;
     struct progress_state prog = {.is_tty = !o->quiet && !o->is_openjd && isatty(STDERR_FILENO),
@@ -782,6 +795,17 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
         rc = RB_EXIT_USAGE; /* a bad output location, found before any rendering */
         goto out;
     }
+    /* Every frame of the run is claimed before the first is rendered, so a second render of
+     * any of them stops at once (exit 2, as a bad output location), while a farm's chunks,
+     * each with frames of its own, share the folder. */
+    st = rb_io_output_lock_create(job->output, &lock, &err);
+    for (int f = first, more = 1; !st && more; more = rb_render_frames_next(&o->frames, f, &f))
+        st = rb_io_output_lock_claim(lock, f, &err);
+    if (st) {
+        cmd_error("%s", err.msg);
+        rc = RB_EXIT_USAGE;
+        goto out;
+    }
 
     int total = prog.total, rendered = 0, skipped = 0, stale = 0;
     char list[160];
@@ -798,6 +822,13 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
     for (int f = first, more = 1; more; more = rb_render_frames_next(&o->frames, f, &f)) {
         if (interrupted) {
             cmd_error("interrupted: frames %d to %d were not rendered", f, last);
+            rc = RB_EXIT_FAILED;
+            break;
+        }
+        /* The writer would create a removed folder again: stop instead of counting frames
+         * written into a folder that was deleted. */
+        if ((st = rb_io_output_lock_check(lock, &err))) {
+            cmd_error("%s", err.msg);
             rc = RB_EXIT_FAILED;
             break;
         }
@@ -839,6 +870,7 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
         struct rb_render_frame_info info;
         warmup(&prog, f, rb_render_warmup_frames(r, f));
         if ((st = rb_render_frame(r, f, path, &info, &err))) {
+            st = removed_first(lock, st, &err);
             cmd_error("%s", err.msg); /* it names the frame */
             rc = exit_for(st, true);
             break;
@@ -864,7 +896,9 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
         }
     }
     /* The frames still with the writer (the one in flight when a signal came, too). */
-    if ((st = rb_render_flush(r, &err))) {
+    if ((st = rb_render_flush(r, &err)) ||
+        (rc == RB_EXIT_OK && (st = rb_io_output_lock_check(lock, &err)))) {
+        st = removed_first(lock, st, &err);
         cmd_error("%s", err.msg);
         rc = exit_for(st, true);
     }
@@ -895,6 +929,7 @@ out:
     if (rc != RB_EXIT_OK && o->is_openjd)
         openjd("openjd_fail: %s", cmd_last_error);
     rb_render_destroy(r);
+    rb_io_output_lock_destroy(lock);
     free(env);
     rb_scene_destroy(scene);
     rb_job_destroy(job);

@@ -84,7 +84,22 @@ char *rb_strdup(const char *s);
 size_t rb_strlcpy(char *dst, const char *src, size_t size);
 /* Seconds on the monotonic clock, for measuring durations (thread-safe). */
 double rb_monotonic_s(void);
-/* Reads a whole file into a new NUL-terminated buffer. */
+/* Input files larger than this are refused before a byte is read: no job, scene, buffer,
+ * texture or environment map comes near it, and a bound keeps a hostile file from growing the
+ * process until the kernel steps in. glTF itself cannot address more (tinygltf: 32-bit sizes). */
+#define RB_FILE_MAX_BYTES (4ull << 30)
+
+/* Whether path is a regular file (symlinks followed); RB_E_IO naming path and what it is ("a
+ * FIFO", "a directory", "a character device") when not. Readers check before they open, so a
+ * FIFO never blocks an open and a device or directory is never read as if it were data. */
+enum rb_status rb_file_check_regular(const char *path, struct rb_err *err);
+/* Opens path read-only (O_NONBLOCK, so that a FIFO swapped in after a check cannot block) and
+ * checks the opened file itself: regular, and at most max_bytes long. *fd and *size_bytes only
+ * on success; the caller closes *fd. */
+enum rb_status rb_file_open_regular(const char *path, uint64_t max_bytes, int *fd,
+                                    uint64_t *size_bytes, struct rb_err *err);
+/* Reads a whole regular file (rb_file_open_regular, RB_FILE_MAX_BYTES) into a new
+ * NUL-terminated buffer; never more than the size fstat reported when it was opened. */
 enum rb_status rb_read_file(const char *path, char **out, size_t *out_size, struct rb_err *err);
 
 /* ---- suggestions (suggest.c) ---------------------------------------------------------------- */

@@ -2,11 +2,14 @@
 #include "core/core.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 enum rb_status rb_errf(struct rb_err *err, enum rb_status code, const char *fmt, ...)
 {
@@ -85,40 +88,96 @@ size_t rb_strlcpy(char *dst, const char *src, size_t size)
     return n;
 }
 
+/* For messages: what a file that is not a regular file is instead. */
+static const char *file_kind(mode_t mode)
+{
+    if (S_ISDIR(mode))
+        return "a directory";
+    if (S_ISFIFO(mode))
+        return "a FIFO";
+    if (S_ISCHR(mode))
+        return "a character device";
+    if (S_ISBLK(mode))
+        return "a block device";
+    if (S_ISSOCK(mode))
+        return "a socket";
+    return "not a regular file";
+}
+
+enum rb_status rb_file_check_regular(const char *path, struct rb_err *err)
+{
+    struct stat sb;
+    if (stat(path, &sb) != 0)
+        return rb_errf(err, RB_E_IO, "cannot open '%s': %s", path, strerror(errno));
+    if (!S_ISREG(sb.st_mode))
+        return rb_errf(err, RB_E_IO, "cannot read '%s': it is %s, not a regular file", path,
+                       file_kind(sb.st_mode));
+    return RB_OK;
+}
+
+enum rb_status rb_file_open_regular(const char *path, uint64_t max_bytes, int *fd,
+                                    uint64_t *size_bytes, struct rb_err *err)
+{
+    /* stat first: opening some devices has effects of its own. */
+    enum rb_status st = rb_file_check_regular(path, err);
+    if (st)
+        return st;
+    int f = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (f < 0)
+        return rb_errf(err, RB_E_IO, "cannot open '%s': %s", path, strerror(errno));
+    struct stat sb;
+    if (fstat(f, &sb) != 0) {
+        st = rb_errf(err, RB_E_IO, "cannot open '%s': %s", path, strerror(errno));
+    } else if (!S_ISREG(sb.st_mode)) {
+        st = rb_errf(err, RB_E_IO, "cannot read '%s': it is %s, not a regular file", path,
+                     file_kind(sb.st_mode));
+    } else if ((uint64_t)sb.st_size > max_bytes) {
+        st = rb_errf(err, RB_E_IO,
+                     "cannot read '%s': %llu bytes, more than the %llu a file may have", path,
+                     (unsigned long long)sb.st_size, (unsigned long long)max_bytes);
+    }
+    if (st) {
+        close(f);
+        return st;
+    }
+    *fd = f;
+    *size_bytes = (uint64_t)sb.st_size;
+    return RB_OK;
+}
+
 enum rb_status rb_read_file(const char *path, char **out, size_t *out_size, struct rb_err *err)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return rb_errf(err, RB_E_IO, "cannot open '%s': %s", path, strerror(errno));
-    char *buf = NULL;
-    size_t size = 0, cap = 0;
-    for (;;) {
-        if (size + 4096 + 1 > cap) {
-            size_t ncap = cap ? cap * 2 : 65536;
-            char *nb = realloc(buf, ncap);
-            if (!nb) {
-                free(buf);
-                fclose(f);
-                return rb_errf(err, RB_E_NOMEM, "cannot read '%s': out of memory", path);
-            }
-            buf = nb;
-            cap = ncap;
+    int fd = -1;
+    uint64_t size = 0;
+    enum rb_status st = rb_file_open_regular(path, RB_FILE_MAX_BYTES, &fd, &size, err);
+    if (st)
+        return st;
+    char *buf = malloc((size_t)size + 1);
+    if (!buf) {
+        close(fd);
+        return rb_errf(err, RB_E_NOMEM, "cannot read '%s': out of memory", path);
+    }
+    /* Up to the size fstat gave: a file that grows meanwhile is read as it was. */
+    size_t got = 0;
+    while (got < size) {
+        ssize_t n = read(fd, buf + got, (size_t)size - got);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0) {
+            int saved = errno;
+            free(buf);
+            close(fd);
+            return rb_errf(err, RB_E_IO, "cannot read '%s': %s", path, strerror(saved));
         }
-        size_t got = fread(buf + size, 1, cap - size - 1, f);
-        size += got;
-        if (got == 0)
-            break;
+        if (n == 0)
+            break; /* shrank meanwhile */
+        got += (size_t)n;
     }
-    bool bad = ferror(f);
-    fclose(f);
-    if (bad) {
-        free(buf);
-        return rb_errf(err, RB_E_IO, "cannot read '%s': %s", path, strerror(errno));
-    }
-    buf[size] = '\0';
+    close(fd);
+    buf[got] = '\0';
     *out = buf;
     if (out_size)
-        *out_size = size;
+        *out_size = got;
     return RB_OK;
 }
 

@@ -215,6 +215,110 @@ unsigned rb_io_remove_stale_temps(const char *path)
     return removed;
 }
 
+struct rb_io_output_lock {
+    char *pattern, *dir, *path;
+    int fd;
+    dev_t dir_dev;
+    ino_t dir_ino;
+};
+
+enum rb_status rb_io_output_lock_create(const char *pattern, struct rb_io_output_lock **out,
+                                        struct rb_err *err)
+{
+    enum rb_status st = RB_OK;
+    struct rb_io_output_lock *lock = calloc(1, sizeof(*lock));
+    size_t n = strlen(pattern);
+    if (!lock || !(lock->pattern = rb_strdup(pattern)) || !(lock->dir = malloc(n + 2)) ||
+        !(lock->path = malloc(n + 16))) {
+        st = rb_errf(err, RB_E_NOMEM, "output lock for '%s': out of memory", pattern);
+        goto fail;
+    }
+    lock->fd = -1;
+    /* The directory: the pattern's, cut before a component that holds the frame number. */
+    const char *hash = strchr(pattern, '#');
+    const char *slash = strrchr(pattern, '/');
+    const char *name = slash ? slash + 1 : pattern;
+    if (hash && slash && hash < slash) {
+        const char *s = pattern + (hash - pattern);
+        while (s > pattern && *s != '/')
+            s--;
+        slash = *s == '/' ? s : NULL;
+    }
+    if (!slash)
+        rb_strlcpy(lock->dir, ".", n + 2);
+    else if (slash == pattern)
+        rb_strlcpy(lock->dir, "/", n + 2);
+    else
+        snprintf(lock->dir, n + 2, "%.*s", (int)(slash - pattern), pattern);
+    snprintf(lock->path, n + 16, "%s/.%s.lock", lock->dir, name);
+    if ((st = rb_io_make_parent_dirs(lock->path, err)))
+        goto fail;
+    lock->fd = open(lock->path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+    struct stat sb;
+    if (lock->fd < 0 || stat(lock->dir, &sb) != 0) {
+        st = rb_errf(err, RB_E_IO, "cannot open lock file '%s': %s", lock->path, strerror(errno));
+        goto fail;
+    }
+    lock->dir_dev = sb.st_dev;
+    lock->dir_ino = sb.st_ino;
+    *out = lock;
+    return RB_OK;
+fail:
+    rb_io_output_lock_destroy(lock);
+    return st;
+}
+
+void rb_io_output_lock_destroy(struct rb_io_output_lock *lock)
+{
+    if (!lock)
+        return;
+    if (lock->fd >= 0)
+        close(lock->fd); /* drops every claim */
+    free(lock->pattern);
+    free(lock->dir);
+    free(lock->path);
+    free(lock);
+}
+
+enum rb_status rb_io_output_lock_claim(struct rb_io_output_lock *lock, int frame,
+                                       struct rb_err *err)
+{
+    /* Record locks (fcntl), not flock: a byte per frame lets chunks of one output share the
+     * file. They belong to the process, which opens this file only here: closing another
+     * descriptor of it would drop them. */
+    struct flock fl = {.l_type = F_WRLCK,
+                       .l_whence = SEEK_SET,
+                       .l_start = (off_t)frame + ((off_t)1 << 31),
+                       .l_len = 1};
+    if (fcntl(lock->fd, F_SETLK, &fl) == 0)
+        return RB_OK;
+    int e = errno;
+    if (e != EACCES && e != EAGAIN)
+        return rb_errf(err, RB_E_IO, "cannot lock frame %d in '%s': %s", frame, lock->path,
+                       strerror(e));
+    struct flock who = fl;
+    long pid = fcntl(lock->fd, F_GETLK, &who) == 0 && who.l_type != F_UNLCK ? (long)who.l_pid : 0;
+    char by[48] = "";
+    if (pid > 0)
+        snprintf(by, sizeof(by), " (pid %ld)", pid);
+    return rb_errf(err, RB_E_INVALID,
+                   "frame %d of '%s' is being rendered by another raybundle%s; render other "
+                   "frames (--frames, --chunk) or another output (--out)",
+                   frame, lock->pattern, by);
+}
+
+enum rb_status rb_io_output_lock_check(const struct rb_io_output_lock *lock, struct rb_err *err)
+{
+    struct stat sb, fsb;
+    if (stat(lock->dir, &sb) != 0 || sb.st_dev != lock->dir_dev || sb.st_ino != lock->dir_ino ||
+        (fstat(lock->fd, &fsb) == 0 && fsb.st_nlink == 0))
+        return rb_errf(err, RB_E_IO,
+                       "output directory '%s' was removed during the run: the frames written to "
+                       "it are lost",
+                       lock->dir);
+    return RB_OK;
+}
+
 /* "<path>.tmp.<pid><ext>": beside path, so the final rename stays on one file system. */
 static char *temp_path(const char *path, const char *ext)
 {
@@ -582,13 +686,13 @@ static enum rb_status read_oiio(const char *path, struct rb_io_image *img, struc
 enum rb_status rb_io_image_read(const char *path, struct rb_io_image *out, struct rb_err *err)
 {
     struct rb_io_image img = {0};
-    struct stat sb;
 
     if (!path || !*path || !out)
         return rb_errf(err, RB_E_INVALID, "read image: no path");
-    if (stat(path, &sb) != 0)
-        return rb_errf(err, RB_E_IO, "cannot read '%s': %s", path, strerror(errno));
-    enum rb_status st;
+    /* Before any format probe: a FIFO would block it, and a device has no end to read to. */
+    enum rb_status st = rb_file_check_regular(path, err);
+    if (st)
+        return st;
     if (rb_exr_is_exr(path))
         st = read_exr(path, &img, err);
     else if (rb_png_is_png(path))
@@ -663,7 +767,6 @@ enum rb_status rb_io_image_attrs_read(const char *path, struct rb_io_image_attrs
                                       struct rb_err *err)
 {
     struct rb_exr_input *in = NULL;
-    struct stat sb;
     uint32_t w, h, n;
     char msg[400];
     enum rb_status st = RB_OK;
@@ -673,8 +776,8 @@ enum rb_status rb_io_image_attrs_read(const char *path, struct rb_io_image_attrs
     *out = (struct rb_io_image_attrs){0};
     if (!path || !*path)
         return rb_errf(err, RB_E_INVALID, "read attributes: no path");
-    if (stat(path, &sb) != 0)
-        return rb_errf(err, RB_E_IO, "cannot read '%s': %s", path, strerror(errno));
+    if ((st = rb_file_check_regular(path, err)))
+        return st;
     if (!rb_exr_is_exr(path))
         return RB_OK;
     if (rb_exr_open(path, &in, &w, &h, &n, msg, sizeof(msg)) != RB_EXR_OK)

@@ -35,9 +35,30 @@ enum rb_status rb_io_write_atomic(const char *path, const void *data, size_t siz
 
 /* Removes the temporary files a killed writer of path (or of its sidecars) left behind:
  * "<stem>.*.tmp.*" beside it, stem being path without its extension. Returns how many. For
- * --resume, which renders the frame again; a writer still running on the same output would lose its
- * temporary file, so two renders must not share an output pattern. */
+ * --resume, which renders the frame again; only for a frame this process holds through
+ * rb_io_output_lock_claim, so that no other writer of the frame can be running. */
 unsigned rb_io_remove_stale_temps(const char *path);
+
+/* One writer per frame of an output. The lock file is ".<pattern's file name>.lock" in the
+ * pattern's directory (the part before any '#'), created there (with its directories) when
+ * missing; each frame a run claims is a POSIX record lock on one byte of it (at the frame's
+ * number plus 2^31). Renders of different frames of one output, such as a farm's chunks, share
+ * the folder; a second render of a frame another process holds fails at once. The kernel drops
+ * the locks when the process ends, however it ends, so a lock left behind cannot be stale, and
+ * the file itself is left in place. The directory's identity is kept, to tell when it is removed
+ * (or replaced) during the run. */
+struct rb_io_output_lock;
+/* Opens the lock file of pattern; *out only on success. RB_E_IO names the directory. */
+enum rb_status rb_io_output_lock_create(const char *pattern, struct rb_io_output_lock **out,
+                                        struct rb_err *err);
+/* Releases every claim and closes the file; accepts NULL. */
+void rb_io_output_lock_destroy(struct rb_io_output_lock *lock);
+/* Claims frame for this process without waiting. RB_E_INVALID when another process holds it:
+ * "frame F of 'pattern' is being rendered by another raybundle (pid N)". */
+enum rb_status rb_io_output_lock_claim(struct rb_io_output_lock *lock, int frame,
+                                       struct rb_err *err);
+/* RB_E_IO when the output directory was removed or replaced since the lock was created. */
+enum rb_status rb_io_output_lock_check(const struct rb_io_output_lock *lock, struct rb_err *err);
 
 /* ---- EXR -------------------------------------------------------------------------------- */
 

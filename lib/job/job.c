@@ -880,6 +880,43 @@ static enum rb_status walk_mapping(struct ctx *c, yaml_node_t *map, const char *
     return RB_OK;
 }
 
+/* The deepest nesting of sequences and mappings a job may have. No key is deeper than 4, and
+ * the cap keeps parsing linear: libyaml's scanner walks its stack of possible simple keys, one
+ * per open flow collection, at every token, so a document nested n deep costs n^2. */
+#define JOB_MAX_DEPTH 64
+
+/* Checks the nesting with libyaml's events before anything builds a document, stopping at the
+ * first collection past JOB_MAX_DEPTH: the scanner then has seen little beyond that point. A
+ * YAML error is left to load_yaml, which reports it at the same mark. */
+static enum rb_status check_depth(struct ctx *c, const char *text, size_t size)
+{
+    yaml_parser_t parser;
+    yaml_event_t ev;
+    enum rb_status st = RB_OK;
+    size_t depth = 0;
+    if (!yaml_parser_initialize(&parser))
+        return rb_errf(c->err, RB_E_NOMEM, "%s: cannot initialize the YAML parser", c->name);
+    yaml_parser_set_input_string(&parser, (const unsigned char *)text, size);
+    for (;;) {
+        if (!yaml_parser_parse(&parser, &ev))
+            break;
+        yaml_event_type_t type = ev.type;
+        if (type == YAML_SEQUENCE_START_EVENT || type == YAML_MAPPING_START_EVENT) {
+            if (++depth > JOB_MAX_DEPTH) {
+                struct mark at = mark_at(c, ev.start_mark);
+                st = fail(c, &at, RB_E_PARSE, "nested deeper than %d levels", JOB_MAX_DEPTH);
+            }
+        } else if (type == YAML_SEQUENCE_END_EVENT || type == YAML_MAPPING_END_EVENT) {
+            depth--;
+        }
+        yaml_event_delete(&ev);
+        if (st || type == YAML_STREAM_END_EVENT)
+            break;
+    }
+    yaml_parser_delete(&parser);
+    return st;
+}
+
 /* Parses text into doc; on failure, a message at libyaml's mark. */
 static enum rb_status load_yaml(struct ctx *c, const char *text, size_t size, yaml_document_t *doc,
                                 bool *has_doc)
@@ -887,6 +924,8 @@ static enum rb_status load_yaml(struct ctx *c, const char *text, size_t size, ya
     yaml_parser_t parser;
     enum rb_status st = RB_OK;
     *has_doc = false;
+    if ((st = check_depth(c, text, size)))
+        return st;
     if (!yaml_parser_initialize(&parser))
         return rb_errf(c->err, RB_E_NOMEM, "%s: cannot initialize the YAML parser", c->name);
     yaml_parser_set_input_string(&parser, (const unsigned char *)text, size);

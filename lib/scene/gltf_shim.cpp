@@ -25,6 +25,9 @@ extern "C" {
 #include <string>
 #include <vector>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 namespace
 {
 
@@ -647,22 +650,179 @@ bool ends_with(const std::string &s, const char *suffix)
     return true;
 }
 
-// Reads all of path into data.
-enum rb_status read_file(const char *path, std::vector<unsigned char> &data, struct rb_err *err)
+// Reads all of path into data: a regular file only, bounded by its size when opened.
+enum rb_status read_file(const char *path, uint64_t max_bytes, std::vector<unsigned char> &data,
+                         struct rb_err *err)
 {
-    std::FILE *f = std::fopen(path, "rb");
-    if (!f)
-        return rb_errf(err, RB_E_IO, "cannot open '%s': %s", path, std::strerror(errno));
-    unsigned char buf[65536];
-    size_t got;
-    while ((got = std::fread(buf, 1, sizeof(buf), f)) > 0)
-        data.insert(data.end(), buf, buf + got);
-    bool failed = std::ferror(f) != 0;
-    int saved = errno;
-    std::fclose(f);
-    if (failed)
-        return rb_errf(err, RB_E_IO, "cannot read '%s': %s", path, std::strerror(saved));
+    int fd = -1;
+    uint64_t size = 0;
+    enum rb_status st = rb_file_open_regular(path, max_bytes, &fd, &size, err);
+    if (st)
+        return st;
+    data.resize(static_cast<size_t>(size)); // bad_alloc is the caller's "out of memory"
+    size_t got = 0;
+    while (got < data.size()) {
+        ssize_t n = ::read(fd, data.data() + got, data.size() - got);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n <= 0) {
+            if (n == 0)
+                break; // shrank meanwhile: tinygltf then finds the size wrong
+            int saved = errno;
+            ::close(fd);
+            return rb_errf(err, RB_E_IO, "cannot read '%s': %s", path, std::strerror(saved));
+        }
+        got += static_cast<size_t>(n);
+    }
+    ::close(fd);
+    data.resize(got);
     return RB_OK;
+}
+
+// Where JSON text nests deeper than RB_SCENE_JSON_MAX_DEPTH, found without recursion: both JSON
+// parsers recurse per level, and a few tens of thousands of '[' overflow the stack. Returns the
+// byte offset of the bracket that passes the cap, or SIZE_MAX when none does. Strings are
+// skipped; text that does not parse is left to the parser.
+size_t json_too_deep(const char *text, size_t size)
+{
+    size_t depth = 0;
+    bool in_string = false;
+    for (size_t i = 0; i < size; i++) {
+        char ch = text[i];
+        if (in_string) {
+            if (ch == '\\')
+                i++;
+            else if (ch == '"')
+                in_string = false;
+        } else if (ch == '"') {
+            in_string = true;
+        } else if (ch == '[' || ch == '{') {
+            if (++depth > RB_SCENE_JSON_MAX_DEPTH)
+                return i;
+        } else if ((ch == ']' || ch == '}') && depth > 0) {
+            depth--;
+        }
+    }
+    return SIZE_MAX;
+}
+
+// The message for json_too_deep's offset at, as "line L, column C" of the JSON text; path is
+// NULL for text that came from no file.
+enum rb_status too_deep(const char *path, const char *text, size_t at, bool binary,
+                        struct rb_err *err)
+{
+    size_t line = 1, col = 1;
+    for (size_t i = 0; i < at; i++) {
+        if (text[i] == '\n') {
+            line++;
+            col = 1;
+        } else {
+            col++;
+        }
+    }
+    if (!path)
+        return rb_errf(err, RB_E_PARSE, "JSON nests deeper than %d levels at line %zu, column %zu",
+                       RB_SCENE_JSON_MAX_DEPTH, line, col);
+    return rb_errf(err, RB_E_PARSE,
+                   "cannot load '%s': JSON%s nests deeper than %d levels at line %zu, column %zu",
+                   path, binary ? " chunk" : "", RB_SCENE_JSON_MAX_DEPTH, line, col);
+}
+
+// What tinygltf's file callbacks know: the byteLength each external buffer file declares, by
+// the path tinygltf will ask for (the uri decoded and joined to the base directory, or to ".",
+// as its FindFile does).
+struct Files {
+    std::vector<std::pair<std::string, uint64_t>> buffers;
+};
+
+std::string join_path(const std::string &a, const std::string &b)
+{
+    if (a.empty())
+        return b;
+    return a.back() == '/' || a.back() == '\\' ? a + b : a + "/" + b;
+}
+
+// dlib::urldecode, which tinygltf applies to buffer uris: "%XX" is a byte, '+' a space.
+std::string url_decode(const std::string &s)
+{
+    std::string out;
+    for (size_t i = 0; i < s.size(); i++) {
+        if (s[i] == '+') {
+            out += ' ';
+        } else if (s[i] == '%' && i + 2 < s.size() && std::isxdigit((unsigned char)s[i + 1]) &&
+                   std::isxdigit((unsigned char)s[i + 2])) {
+            out += static_cast<char>(std::stoi(s.substr(i + 1, 2), nullptr, 16));
+            i += 2;
+        } else {
+            out += s[i];
+        }
+    }
+    return out;
+}
+
+void collect_buffers(const json &doc, const std::string &base, Files &files)
+{
+    auto it = doc.find("buffers");
+    if (it == doc.end() || !it->is_array())
+        return;
+    for (const json &b : *it) {
+        if (!b.is_object())
+            continue;
+        auto uri = b.find("uri");
+        auto len = b.find("byteLength");
+        if (uri == b.end() || !uri->is_string() || len == b.end() || !len->is_number_unsigned())
+            continue;
+        std::string u = uri->get<std::string>();
+        if (u.compare(0, 5, "data:") == 0)
+            continue;
+        std::string d = url_decode(u);
+        files.buffers.emplace_back(join_path(base, d), len->get<uint64_t>());
+        files.buffers.emplace_back(join_path(".", d), len->get<uint64_t>());
+    }
+}
+
+bool fs_exists(const std::string &path, void *)
+{
+    struct stat sb;
+    return ::stat(path.c_str(), &sb) == 0;
+}
+
+std::string fs_expand(const std::string &path, void *)
+{
+    return path;
+}
+
+// tinygltf's reader for external buffers and images: regular files only, and a buffer file
+// no longer than the byteLength a buffer declares for it (a longer one is refused unread;
+// tinygltf wants the size exact and names a shorter one itself).
+bool fs_read(std::vector<unsigned char> *out, std::string *why, const std::string &path, void *user)
+{
+    const Files *files = static_cast<const Files *>(user);
+    uint64_t limit = RB_FILE_MAX_BYTES;
+    bool is_buffer = false;
+    for (const auto &b : files->buffers)
+        if (b.first == path && (!is_buffer || b.second > limit)) {
+            limit = b.second;
+            is_buffer = true;
+        }
+    struct rb_err err = RB_ERR_INIT;
+    struct stat sb;
+    if (is_buffer && rb_file_check_regular(path.c_str(), &err) == RB_OK &&
+        ::stat(path.c_str(), &sb) == 0 && static_cast<uint64_t>(sb.st_size) > limit) {
+        *why = std::to_string(sb.st_size) + " bytes, more than the byteLength " +
+               std::to_string(limit) + " its buffer declares";
+        return false;
+    }
+    if (read_file(path.c_str(), limit, *out, &err) != RB_OK) {
+        *why = err.msg;
+        return false;
+    }
+    return true;
+}
+
+bool fs_write(std::string *, const std::string &, const std::vector<unsigned char> &, void *)
+{
+    return false; // raybundle never writes glTF
 }
 
 // The directory tinygltf resolves external buffers and images against, as its *FromFile do.
@@ -682,6 +842,9 @@ extern "C" enum rb_status rb_gltf_shim_check(const char *text, size_t size,
                                              struct rb_err *err) noexcept
 {
     try {
+        size_t deep = json_too_deep(text, size);
+        if (deep != SIZE_MAX)
+            return too_deep(nullptr, text, deep, false, err);
         json doc;
         try {
             doc = json::parse(text, text + size);
@@ -713,31 +876,40 @@ extern "C" enum rb_status rb_gltf_shim_load(const char *path, const struct rb_gl
 {
     try {
         std::vector<unsigned char> data;
-        enum rb_status st = read_file(path, data, err);
+        // tinygltf takes an unsigned int size: larger files are refused unread.
+        enum rb_status st = read_file(path, UINT_MAX, data, err);
         if (st)
             return st;
         // Sniff the magic: a .gltf may hold binary glTF and vice versa.
         bool binary = (data.size() >= 4 && std::memcmp(data.data(), "glTF", 4) == 0) ||
                       ends_with(path, ".glb");
-        if (data.size() > UINT_MAX) // tinygltf takes an unsigned int size
-            return rb_errf(err, RB_E_UNSUPPORTED, "cannot load '%s': larger than 4 GiB", path);
 
-        // The types first: tinygltf would skip what does not match. JSON that does not parse,
-        // or is no object, is left to tinygltf's own message.
+        // The nesting first, then the types: tinygltf would skip what does not match. JSON
+        // that does not parse, or is no object, is left to tinygltf's own message.
         const char *text = nullptr;
         size_t text_size = 0;
-        if (check && json_span(data, binary, &text, &text_size)) {
+        std::string base = base_dir(path);
+        Files files;
+        if (json_span(data, binary, &text, &text_size)) {
+            size_t deep = json_too_deep(text, text_size);
+            if (deep != SIZE_MAX)
+                return too_deep(path, text, deep, binary, err);
             json doc = json::parse(text, text + text_size, nullptr, false);
             if (!doc.is_discarded() && doc.is_object()) {
-                Walk w{check->rules, check->rule_count, check->on_issue, check->user, {}};
-                if (!check_doc(w, doc))
-                    return rb_errf(err, RB_E_PARSE, "%s", w.stop.c_str());
+                if (check) {
+                    Walk w{check->rules, check->rule_count, check->on_issue, check->user, {}};
+                    if (!check_doc(w, doc))
+                        return rb_errf(err, RB_E_PARSE, "%s", w.stop.c_str());
+                }
+                collect_buffers(doc, base, files);
             }
         }
 
         std::unique_ptr<Doc> d(new Doc());
         tinygltf::TinyGLTF loader;
-        std::string terr, twarn, base = base_dir(path);
+        tinygltf::FsCallbacks fs = {fs_exists, fs_expand, fs_read, fs_write, &files};
+        loader.SetFsCallbacks(fs);
+        std::string terr, twarn;
         static const unsigned char empty[1] = {0};
         const unsigned char *bytes = data.empty() ? empty : data.data();
         unsigned size = static_cast<unsigned>(data.size());

@@ -205,6 +205,11 @@ struct rb_gltf_doc {
     void *impl; /* the shim's own object */
 };
 
+/* The deepest nesting of arrays and objects a glTF's JSON may have: glTF itself needs about 8,
+ * and extras deep enough to matter only serve to overflow the JSON parsers' recursion. Checked
+ * on the text before any parser sees it. */
+#define RB_SCENE_JSON_MAX_DEPTH 512
+
 /* The JSON type check rb_gltf_shim_load runs before tinygltf parses: see rb_scene_json_check. */
 struct rb_gltf_check {
     const struct rb_scene_json_rule *rules;
