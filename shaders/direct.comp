@@ -1,5 +1,6 @@
-// direct: light from punctual lights (shadow-mapped, 16-tap PCF) and emission at every G-buffer
-// pixel; the environment where no geometry is.
+// direct: light from punctual lights (shadow-mapped, 16-tap PCF; with the direct integrator, the
+// emitters' point samples among them) and emission at every G-buffer pixel; the environment where
+// no geometry is.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "bindings_shared.h"

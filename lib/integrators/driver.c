@@ -52,6 +52,8 @@ enum rb_status rb_integrator_create_with(const struct rb_integrator_desc *desc,
     it->env_height_px = desc->env_height_px;
     it->cur.setup = &it->setup;
     it->prev.setup = &it->setup;
+    it->cur.has_emitter_lights = ops->has_emitter_lights;
+    it->prev.has_emitter_lights = ops->has_emitter_lights;
     it->history_frames = ops->history_frames(desc->job);
     if (desc->history_frames > it->history_frames)
         it->history_frames = desc->history_frames;

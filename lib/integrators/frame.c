@@ -9,9 +9,14 @@
 
 #define MAX_TEXTURE_SIZE 1024
 
+_Static_assert(RB_KIND_POINT == RB_LIGHT_POINT && RB_KIND_SPOT == RB_LIGHT_SPOT &&
+                   RB_KIND_DIRECTIONAL == RB_LIGHT_DIRECTIONAL,
+               "a punctual light's kind on the GPU is its type");
+
+/* Point lights and emitter samples (which light both sides of their surface) take a cube. */
 static uint32_t shadow_layers_for(enum rb_light_type t)
 {
-    return t == RB_LIGHT_POINT ? 6 : 1;
+    return t == RB_LIGHT_POINT || t == RB_LIGHT_EMITTER ? 6 : 1;
 }
 
 enum rb_status rb_frame_buffer(struct rb_gpu *gpu, VkDeviceSize size, VkBufferUsageFlags usage,
@@ -673,6 +678,10 @@ enum rb_status rb_moment_evaluate(const struct rb_job *job, const struct rb_scen
     if (st)
         return st;
     uint32_t total = rb_scene_world_lights(job, scene, m->setup, m->pose, m->lights, RB_MAX_LIGHTS);
+    if (m->has_emitter_lights) {
+        uint32_t at = total < RB_MAX_LIGHTS ? total : RB_MAX_LIGHTS;
+        total += rb_scene_emitter_lights(scene, m->pose, m->lights + at, RB_MAX_LIGHTS - at);
+    }
     if (total > RB_MAX_LIGHTS)
         return rb_errf(err, RB_E_UNSUPPORTED, "%u lights; at most %d are supported", total,
                        RB_MAX_LIGHTS);
@@ -828,7 +837,8 @@ void rb_frame_write_globals(struct rb_frame *frame, const struct rb_job *job, in
         const struct rb_world_light *l = &cur->lights[i];
         struct rb_gpu_light *o = &lights[i];
         bool shadowed = layer + shadow_layers_for(l->type) <= frame->shadow_layer_count;
-        memcpy(o->position, (float[4]){l->position.x, l->position.y, l->position.z, (float)l->type},
+        uint32_t kind = l->type == RB_LIGHT_EMITTER ? RB_KIND_EMITTER : (uint32_t)l->type;
+        memcpy(o->position, (float[4]){l->position.x, l->position.y, l->position.z, (float)kind},
                16);
         memcpy(o->direction, (float[4]){l->direction.x, l->direction.y, l->direction.z, l->range},
                16);

@@ -15,6 +15,7 @@ struct rb_moment {
     struct rb_camera camera;
     struct rb_world_light lights[RB_MAX_LIGHTS];
     uint32_t light_count;
+    bool has_emitter_lights; /* the emitters' point samples follow the lights (the ops' flag) */
 };
 
 /* What the driver hands an integrator's record function: the frame being recorded. */
@@ -29,6 +30,10 @@ struct rb_frame_ctx {
 /* An integrator: its resources and the ordered passes of its frame. */
 struct rb_integrator_ops {
     const char *name;
+    /* Whether the emissive surfaces light through the direct pass as point samples
+     * (rb_scene_emitter_lights, after the other lights): direct's only light from them; the
+     * global-illumination integrators have their own emitter strategies and leave this unset. */
+    bool has_emitter_lights;
     /* Earlier frames a frame's state depends on (the history contract in integrators.h). */
     uint32_t (*history_frames)(const struct rb_job *job);
     /* Creates the integrator's own passes and resources once the driver's frame exists. */

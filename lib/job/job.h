@@ -26,8 +26,9 @@ enum rb_interp {
 enum rb_path_space {
     RB_PATHS_DEFAULT = 0, /* resolves to FULL */
     RB_PATHS_FULL,        /* every path up to max_bounces */
-    RB_PATHS_DIRECT,      /* what the direct integrator computes: punctual lights (shadowed),
-                           * emission, and the environment seen directly */
+    RB_PATHS_DIRECT,      /* what the direct integrator computes: punctual lights and the
+                           * emitters' point samples (shadowed), emission, and the environment
+                           * seen directly */
     RB_PATHS_BDPT,        /* what bdpt computes: direct light and up to two indirect bounces
                            * from punctual lights and emissive triangles, the environment's
                            * direct light */
@@ -67,6 +68,8 @@ enum rb_light_type {
     RB_LIGHT_POINT,
     RB_LIGHT_SPOT,
     RB_LIGHT_DIRECTIONAL,
+    RB_LIGHT_EMITTER, /* a point sample of the emissive surfaces (rb_scene_emitter_lights); never
+                       * named in a job: light_names in job.c stops before it */
 };
 
 /* When a default point light is added (lib/scene/setup.c). */

@@ -23,7 +23,8 @@
  *   throughput's largest component clamped to [0.05, 0.95]. Rays leave from a point moved off
  *   the surface, and shadow rays are aimed from that point (emitter samples measured from it).
  * - Path spaces: FULL counts every path up to max_bounces bounces past the first hit. DIRECT is
- *   the direct integrator's: emission at x1, punctual lights at x1 (exact visibility), the
+ *   the direct integrator's: emission at x1, punctual lights and the emitters' fixed point
+ *   samples (rb_scene_emitter_lights, the direct integrator's) at x1 (exact visibility), the
  *   environment on camera misses; it draws no random numbers but box's pixel positions, so
  *   under center its samples after the first are copies. BDPT is BDPT.md's: emission at x1;
  *   punctual lights and emissive triangles at x1, x2 and x3 (direct light and one and two
@@ -385,6 +386,12 @@ void rb_reference_destroy(struct rb_reference *ref)
 
 /* ---- the frame's world ---------------------------------------------------------------------- */
 
+static enum rb_path_space paths_of(const struct rb_job *job)
+{
+    return job->integrator.reference.paths == RB_PATHS_DEFAULT ? RB_PATHS_FULL
+                                                               : job->integrator.reference.paths;
+}
+
 static enum rb_status update_lights(struct rb_reference *ref, struct rb_err *err)
 {
     uint32_t n = rb_scene_world_lights(ref->job, ref->scene, &ref->setup, ref->pose, NULL, 0);
@@ -400,6 +407,27 @@ static enum rb_status update_lights(struct rb_reference *ref, struct rb_err *err
         ref->light_cap = n;
     }
     n = rb_scene_world_lights(ref->job, ref->scene, &ref->setup, ref->pose, ref->world_lights, n);
+    /* The direct path space is the direct integrator's: the emitters light as its point samples
+     * do (exact visibility in place of their shadow maps); the other path spaces sample the
+     * emissive triangles themselves. */
+    if (paths_of(ref->job) == RB_PATHS_DIRECT) {
+        struct rb_world_light samples[RB_SCENE_EMITTER_LIGHTS];
+        uint32_t k =
+            rb_scene_emitter_lights(ref->scene, ref->pose, samples, RB_SCENE_EMITTER_LIGHTS);
+        if (n + k > ref->light_cap) {
+            struct rb_world_light *wl = realloc(ref->world_lights, (n + k) * sizeof(*wl));
+            if (wl)
+                ref->world_lights = wl;
+            struct rb_ref_light *l = realloc(ref->lights, (n + k) * sizeof(*l));
+            if (l)
+                ref->lights = l;
+            if (!wl || !l)
+                return rb_errf(err, RB_E_NOMEM, "out of memory for %u lights", n + k);
+            ref->light_cap = n + k;
+        }
+        memcpy(ref->world_lights + n, samples, k * sizeof(*samples));
+        n += k;
+    }
     for (uint32_t i = 0; i < n; i++) {
         const struct rb_world_light *w = &ref->world_lights[i];
         ref->lights[i] = (struct rb_ref_light){
@@ -523,9 +551,7 @@ static enum rb_status prepare_world(struct rb_reference *ref, int frame, double 
     w->emitter_cdf = ref->emitter_cdf;
     w->emit_pdf_area = ref->emit_pdf_area;
     w->env = &ref->env;
-    w->paths = job->integrator.reference.paths == RB_PATHS_DEFAULT
-                   ? RB_PATHS_FULL
-                   : job->integrator.reference.paths;
+    w->paths = paths_of(job);
     w->max_bounces = job->integrator.reference.max_bounces;
     w->rr_depth = job->integrator.reference.rr_depth;
     w->frame = (uint32_t)frame;

@@ -101,6 +101,8 @@ static void nee_punctual(const struct rb_ref_world *w, const struct rb_ref_surfa
             if (L->type == RB_LIGHT_SPOT) {
                 float to_surface[3] = {-l[0], -l[1], -l[2]};
                 atten *= rb_ref_spot_factor(L->direction, to_surface, L->cos_inner, L->cos_outer);
+            } else if (L->type == RB_LIGHT_EMITTER) {
+                atten *= fabsf(rb_f3_dot(L->direction, l)); /* emission leaves both sides */
             }
         }
         float ndl = rb_f3_dot(s->n, l);

@@ -325,11 +325,14 @@ struct rb_scene_setup {
                                             * fitted camera and the default light use these */
     uint32_t punctual_count;               /* the scene's (when used) and the job's lights */
     bool has_emitters;                     /* a drawn primitive's emission is > 0 */
+    double emitter_irradiance;             /* how strongly they light the scene: an irradiance
+                                            * at the bounds' centre (setup.c) */
     bool has_environment;                  /* the environment is not black */
     enum rb_scene_side room_open_side;     /* the bounds enclose a room open on this side */
     struct rb_vec3 fit_direction; /* unit, from the bounds' centre towards a fitted camera */
     bool has_default_light;       /* default_light on, or auto and the frame would be unlit:
-                                   * no punctual light, no emitter, a black environment */
+                                   * no punctual light, no emitter strong enough to light
+                                   * the view, a black environment */
     struct rb_world_light default_light;
     char default_light_note[128]; /* "none", or where the default light is (EXR metadata) */
     uint64_t job_hash; /* job->hash (the settings) with the scene's contents and the environment
@@ -338,7 +341,8 @@ struct rb_scene_setup {
 
 /* Decides the setup of a job: the bounds over the selected clips' whole clip time (sampled at
  * the frame rate, independent of the frame range), the light sources, the default light (logged
- * once at info level when added) and the fitted camera's side (through the open side of a
+ * once when added: at info level, or as a warning when it is added beside emitters too weak
+ * to light the view) and the fitted camera's side (through the open side of a
  * room). env_rgba (env_width_px x env_height_px RGBA floats, or NULL) is the loaded
  * environment map, checked for all-black. Fails only on a bad clip name or out of memory. */
 enum rb_status rb_scene_setup_init(const struct rb_job *job, const struct rb_scene *scene,
@@ -362,6 +366,20 @@ enum rb_status rb_camera_evaluate(const struct rb_job *job, const struct rb_scen
 uint32_t rb_scene_world_lights(const struct rb_job *job, const struct rb_scene *scene,
                                const struct rb_scene_setup *setup, const struct rb_scene_pose *pose,
                                struct rb_world_light *out, uint32_t cap);
+
+/* How many point samples stand for the emissive surfaces where they light as lights do (the
+ * direct integrator, and the reference's direct path space): each a cube of shadow maps. */
+#define RB_SCENE_EMITTER_LIGHTS 8
+
+/* The emissive surfaces as RB_SCENE_EMITTER_LIGHTS lights of type RB_LIGHT_EMITTER, or none when
+ * no drawn primitive has an emissive material: fixed, stratified points picked by power (each
+ * triangle's area times the luminance of its emission, factor x strength x the average of its
+ * emissive texture), from the pose's node transforms (skinned and morphed emitters at their bind
+ * shape). Each sends color x |cos| (its own area's share of the emitted power, both sides, cos
+ * against direction, the triangle's normal) with the inverse-square falloff. Writes up to cap;
+ * returns the count, the same for every pose of a scene. */
+uint32_t rb_scene_emitter_lights(const struct rb_scene *scene, const struct rb_scene_pose *pose,
+                                 struct rb_world_light *out, uint32_t cap);
 
 /* Resolves the job's clip names to indices (all names must exist; none given: the first
  * animation, if any). Writes at most cap indices. */

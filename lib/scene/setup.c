@@ -13,6 +13,10 @@
 #define MAX_CLIPS 64
 #define MAX_BOUNDS_SAMPLES 1024 /* poses sampled over the longest clip */
 #define COVER_GRID 24           /* cells per side when measuring how much of a box face is wall */
+/* Below this irradiance at the centre of the bounds (the default light gives about 1 there),
+ * emissive surfaces alone leave the view too dark to read, and default_light: auto adds a light
+ * (see emitter_irradiance). */
+#define EMITTER_IRRADIANCE_MIN 0.05
 
 static void grow(struct rb_vec3 *lo, struct rb_vec3 *hi, struct rb_vec3 a, struct rb_vec3 b)
 {
@@ -67,6 +71,59 @@ static bool has_emitters(const struct rb_scene *scene, const struct rb_scene_pos
             return true;
     }
     return false;
+}
+
+/* How strongly the scene's emissive surfaces light it, as an irradiance at the centre of the
+ * bounds comparable with the default light's (about 1 there): each emissive triangle's power,
+ * the luminance of its emission (factor x strength x the emissive texture's average) times its
+ * area, over its squared distance from the centre, that distance at least half the bounding
+ * radius (an emitter at the centre lights what is around it, not the centre itself). Facing is
+ * ignored: emission leaves both sides in the reference, and an emissive surface wrapped round
+ * the centre (a bottle's label) faces away from it yet lights the view. Taken at the rest pose,
+ * summed in a fixed order in double: a function of the scene alone. */
+static double emitter_irradiance(const struct rb_scene *scene, const struct rb_scene_pose *pose,
+                                 struct rb_vec3 lo, struct rb_vec3 hi)
+{
+    struct rb_vec3 c = rb_v3_scale(rb_v3_add(lo, hi), 0.5f);
+    double radius = 0.5 * rb_v3_length(rb_v3_sub(hi, lo));
+    double near2 = radius > 0.0 ? 0.25 * radius * radius : 1e-12;
+    double total = 0.0;
+    uint32_t cached_tex = RB_SCENE_NONE; /* no texture: white, avg's first value */
+    double avg[3] = {1.0, 1.0, 1.0};
+    for (uint32_t i = 0; i < pose->instance_count; i++) {
+        const struct rb_scene_instance *in = &pose->instances[i];
+        const struct rb_scene_primitive *p = &scene->primitives[in->primitive];
+        const struct rb_scene_material *m = &scene->materials[p->material];
+        if (!(m->emissive[0] > 0.0f || m->emissive[1] > 0.0f || m->emissive[2] > 0.0f))
+            continue;
+        if (m->emissive_tex != cached_tex) {
+            rb_scene_texture_average(scene, m->emissive_tex, avg);
+            cached_tex = m->emissive_tex;
+        }
+        double lum = 0.2126 * m->emissive[0] * avg[0] + 0.7152 * m->emissive[1] * avg[1] +
+                     0.0722 * m->emissive[2] * avg[2];
+        if (!(lum > 0.0) || !isfinite(lum))
+            continue;
+        const struct rb_mat4 *w = &pose->node_world[in->node];
+        for (uint32_t t = 0; t + 2 < p->index_count; t += 3) {
+            struct rb_vec3 v[3];
+            for (int k = 0; k < 3; k++) {
+                const float *pos =
+                    scene->vertices[p->first_vertex + scene->indices[p->first_index + t + k]]
+                        .position;
+                v[k] = rb_mat4_point(w, rb_v3(pos[0], pos[1], pos[2]));
+            }
+            struct rb_vec3 e1 = rb_v3_sub(v[1], v[0]), e2 = rb_v3_sub(v[2], v[0]);
+            struct rb_vec3 x = rb_v3_cross(e1, e2);
+            double area = 0.5 * rb_v3_length(x);
+            struct rb_vec3 mid = rb_v3_scale(rb_v3_add(rb_v3_add(v[0], v[1]), v[2]), 1.0f / 3.0f);
+            struct rb_vec3 d = rb_v3_sub(mid, c);
+            double d2 = fmax((double)d.x * d.x + (double)d.y * d.y + (double)d.z * d.z, near2);
+            if (isfinite(area) && isfinite(d2))
+                total += lum * area / d2;
+        }
+    }
+    return total;
 }
 
 static bool env_is_black(const struct rb_job *job, const float *env_rgba, uint32_t w, uint32_t h)
@@ -223,6 +280,8 @@ enum rb_status rb_scene_setup_init(const struct rb_job *job, const struct rb_sce
      * default light yet). */
     s.punctual_count = rb_scene_world_lights(job, scene, &s, pose, NULL, 0);
     s.has_emitters = has_emitters(scene, pose);
+    s.emitter_irradiance =
+        s.has_emitters ? emitter_irradiance(scene, pose, s.bounds_min, s.bounds_max) : 0.0;
     s.has_environment = !env_is_black(job, env_rgba, env_width_px, env_height_px);
     float cover[6];
     face_coverage(scene, pose, s.bounds_min, s.bounds_max, cover);
@@ -244,18 +303,35 @@ enum rb_status rb_scene_setup_init(const struct rb_job *job, const struct rb_sce
                "XYZ"[open / 2]);
 
     enum rb_default_light mode = job->default_light;
+    bool weak_emitters = s.has_emitters && s.emitter_irradiance < EMITTER_IRRADIANCE_MIN;
+    /* At info level where the figure decides (auto, and no other light), else at debug. */
+    bool emitters_decide = mode != RB_DEFAULT_LIGHT_ON && mode != RB_DEFAULT_LIGHT_OFF &&
+                           s.punctual_count == 0 && !s.has_environment;
+    if (s.has_emitters)
+        rb_log(emitters_decide ? RB_LOG_INFO : RB_LOG_DEBUG,
+               "emissive surfaces give an irradiance of about %.3g at the centre of the bounds "
+               "(the default light about 1; below %g they count as too weak to light the view)",
+               s.emitter_irradiance, EMITTER_IRRADIANCE_MIN);
     s.has_default_light =
         mode == RB_DEFAULT_LIGHT_ON || (mode != RB_DEFAULT_LIGHT_OFF && s.punctual_count == 0 &&
-                                        !s.has_emitters && !s.has_environment);
+                                        (!s.has_emitters || weak_emitters) && !s.has_environment);
     if (s.has_default_light) {
         s.default_light = default_light(&s);
         const struct rb_world_light *l = &s.default_light;
         snprintf(s.default_light_note, sizeof(s.default_light_note),
                  "point light at (%g, %g, %g), intensity %g", l->position.x, l->position.y,
                  l->position.z, l->color[0]);
-        rb_log(RB_LOG_INFO, "default light (default_light: %s%s): %s", mode_names[mode],
-               mode == RB_DEFAULT_LIGHT_ON ? "" : ", the frame would be unlit without it",
-               s.default_light_note);
+        /* Adding a light to a scene that has its own is a surprise worth a line at the
+         * default log level; the other cases are what the job asked for or had no choice. */
+        if (weak_emitters && mode != RB_DEFAULT_LIGHT_ON)
+            rb_log(RB_LOG_WARN,
+                   "default light (default_light: auto, the scene's emissive surfaces are too "
+                   "weak to light the view: irradiance %.3g at its centre, below %g): %s",
+                   s.emitter_irradiance, EMITTER_IRRADIANCE_MIN, s.default_light_note);
+        else
+            rb_log(RB_LOG_INFO, "default light (default_light: %s%s): %s", mode_names[mode],
+                   mode == RB_DEFAULT_LIGHT_ON ? "" : ", the frame would be unlit without it",
+                   s.default_light_note);
     } else {
         rb_strlcpy(s.default_light_note, "none", sizeof(s.default_light_note));
     }

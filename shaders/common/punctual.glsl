@@ -27,6 +27,8 @@ vec3 rb_punctual_light(vec3 acc, vec3 p, vec3 n, vec3 ng, vec3 v, vec3 c_diff, v
             atten = rb_light_falloff(dist, L.direction.w);
             if (kind == RB_KIND_SPOT)
                 atten *= rb_spot_factor(L.direction.xyz, -l, L.cone.xy);
+            else if (kind == RB_KIND_EMITTER)
+                atten *= abs(dot(L.direction.xyz, l)); // emission leaves both sides
         }
         float ndl = dot(n, l);
         if (ndl <= 0.0 || atten <= 0.0 || dot(ng, l) <= 0.0)
@@ -35,7 +37,8 @@ vec3 rb_punctual_light(vec3 acc, vec3 p, vec3 n, vec3 ng, vec3 v, vec3 c_diff, v
         int first = int(L.color.w);
         if (first >= 0) {
             float cos_g = max(dot(ng, l), 0.0);
-            uint layer = uint(first) + (kind == RB_KIND_POINT ? rb_cube_face(-l) : 0u);
+            bool cube = kind == RB_KIND_POINT || kind == RB_KIND_EMITTER;
+            uint layer = uint(first) + (cube ? rb_cube_face(-l) : 0u);
             vis = shadow_visibility(layer, p, ng, cos_g);
         }
         if (vis <= 0.0)

@@ -26,6 +26,9 @@
 #define RB_KIND_POINT 1
 #define RB_KIND_SPOT 2
 #define RB_KIND_DIRECTIONAL 3
+/* A point sample of the emissive surfaces (the direct integrator's): intensity color x |cos|
+ * against direction, both sides. 7, not 4: bdpt's VPL kinds (bdpt_shared.h) follow 1 to 3. */
+#define RB_KIND_EMITTER 7
 
 /* Per frame: camera, sizes, environment and shadow settings. */
 struct rb_gpu_globals {

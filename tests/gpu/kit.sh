@@ -133,8 +133,7 @@ sed -e 's|^scene: .*|scene: ../scenes/demo/room.gltf|' -e 's|^output: .*|output:
 grep -q '^scene: ../scenes/demo/room.gltf$' "$kit/jobs/demo.yaml" || die "jobs/demo.yaml has no scene: line"
 cat >"$kit/jobs/cornell.yaml" <<'EOF'
 # The Cornell box (cornell-box/CornellBox.glb of the shared scenes) as the classic view frames
-# it: its emissive ceiling quad, and the default point light below the ceiling (on), so that the
-# direct integrator, which lights with punctual lights only, has light too.
+# it: its emissive ceiling quad, and the default point light below the ceiling (on) beside it.
 scene: ../scenes/cornell-box/CornellBox.glb
 output: frame.####.exr
 resolution: [640, 360]
