@@ -680,7 +680,8 @@ enum rb_status rb_moment_evaluate(const struct rb_job *job, const struct rb_scen
     uint32_t total = rb_scene_world_lights(job, scene, m->setup, m->pose, m->lights, RB_MAX_LIGHTS);
     if (m->has_emitter_lights) {
         uint32_t at = total < RB_MAX_LIGHTS ? total : RB_MAX_LIGHTS;
-        total += rb_scene_emitter_lights(scene, m->pose, m->lights + at, RB_MAX_LIGHTS - at);
+        total += rb_scene_emitter_lights(scene, m->pose, job->integrator.direct.emitter_lights,
+                                         m->lights + at, RB_MAX_LIGHTS - at);
     }
     if (total > RB_MAX_LIGHTS)
         return rb_errf(err, RB_E_UNSUPPORTED, "%u lights; at most %d are supported", total,

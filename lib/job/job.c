@@ -186,6 +186,10 @@ static const struct key keys[] = {
       "1024", 0, "shadow map size in pixels (per cube face for point lights)"),
     K("integrator.direct.shadow_bias", KT_FLOAT, JOB(integrator.direct.shadow_bias), 0, NOHI,
       "0.002", 0, "shadow depth bias as a fraction of the distance to the light"),
+    K("integrator.direct.emitter_lights", KT_UINT, JOB(integrator.direct.emitter_lights), 0, 8, "8",
+      0,
+      "point samples standing for the emissive surfaces in direct (and the reference's direct "
+      "path space), each with a cube of shadow maps; 0: emitters do not light"),
     K("integrator.direct.pcf_radius", KT_FLOAT, JOB(integrator.direct.pcf_radius_px), 0, NOHI,
       "1.5", 0, "radius of the 16-tap PCF shadow filter in shadow-map pixels"),
     K("integrator.bdpt.vpls", KT_UINT, JOB(integrator.bdpt.vpls), 1, 65536, "21", 0,
@@ -1341,10 +1345,14 @@ void rb_job_rehash(struct rb_job *job)
         h = h_u32(h, (uint32_t)job->integrator.reference.paths);
         h = h_f64(h, job->integrator.reference.time_limit_s);
         h = h_u32(h, (uint32_t)job->integrator.reference.pixel_filter);
+        if (job->integrator.reference.paths == RB_PATHS_DIRECT)
+            h = h_u32(h, job->integrator.direct.emitter_lights);
     } else {
         h = h_u32(h, job->integrator.direct.shadow_size_px);
         h = h_f32(h, job->integrator.direct.shadow_bias);
         h = h_f32(h, job->integrator.direct.pcf_radius_px);
+        if (kind == RB_INTEGRATOR_DIRECT)
+            h = h_u32(h, job->integrator.direct.emitter_lights);
     }
     if (kind == RB_INTEGRATOR_BDPT) {
         const struct rb_job_bdpt *b = &job->integrator.bdpt;

@@ -149,6 +149,8 @@ struct rb_job {
             uint32_t shadow_size_px; /* per cube face / shadow map, default 1024 */
             float shadow_bias;       /* fraction of the distance to the light; default 0.002 */
             float pcf_radius_px;     /* radius of the 16-tap PCF kernel, default 1.5 */
+            uint32_t emitter_lights; /* point samples standing for the emissive surfaces, each
+                                      * a cube of shadow maps; default 8, 0: none */
         } direct;
         struct rb_job_bdpt {
             uint32_t vpls;             /* VPLs per frame, default 21 */

@@ -411,9 +411,10 @@ static enum rb_status update_lights(struct rb_reference *ref, struct rb_err *err
      * do (exact visibility in place of their shadow maps); the other path spaces sample the
      * emissive triangles themselves. */
     if (paths_of(ref->job) == RB_PATHS_DIRECT) {
-        struct rb_world_light samples[RB_SCENE_EMITTER_LIGHTS];
-        uint32_t k =
-            rb_scene_emitter_lights(ref->scene, ref->pose, samples, RB_SCENE_EMITTER_LIGHTS);
+        struct rb_world_light samples[RB_SCENE_EMITTER_LIGHTS_MAX];
+        uint32_t k = rb_scene_emitter_lights(ref->scene, ref->pose,
+                                             ref->job->integrator.direct.emitter_lights, samples,
+                                             RB_SCENE_EMITTER_LIGHTS_MAX);
         if (n + k > ref->light_cap) {
             struct rb_world_light *wl = realloc(ref->world_lights, (n + k) * sizeof(*wl));
             if (wl)

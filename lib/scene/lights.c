@@ -148,9 +148,11 @@ static double radical_inverse2(uint32_t i)
 }
 
 uint32_t rb_scene_emitter_lights(const struct rb_scene *scene, const struct rb_scene_pose *pose,
-                                 struct rb_world_light *out, uint32_t cap)
+                                 uint32_t count, struct rb_world_light *out, uint32_t cap)
 {
-    enum { K = RB_SCENE_EMITTER_LIGHTS };
+    const uint32_t K = count < RB_SCENE_EMITTER_LIGHTS_MAX ? count : RB_SCENE_EMITTER_LIGHTS_MAX;
+    if (!K)
+        return 0;
     struct rb_vec3 v[3];
     double le[3], lum, weight, total = 0.0;
     bool any = false;
@@ -165,7 +167,7 @@ uint32_t rb_scene_emitter_lights(const struct rb_scene *scene, const struct rb_s
     /* Sample k sits at (k + 1/2) / K along the power's running sum (which triangle, and the
      * first coordinate within it) and at the radical inverse of k across it: a Hammersley set,
      * so the samples spread over the emitters by power and over each triangle. */
-    struct rb_world_light samples[K];
+    struct rb_world_light samples[RB_SCENE_EMITTER_LIGHTS_MAX];
     for (uint32_t k = 0; k < K; k++)
         samples[k] =
             (struct rb_world_light){.type = RB_LIGHT_EMITTER, .direction = rb_v3(0, -1, 0)};

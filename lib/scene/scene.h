@@ -367,11 +367,14 @@ uint32_t rb_scene_world_lights(const struct rb_job *job, const struct rb_scene *
                                const struct rb_scene_setup *setup, const struct rb_scene_pose *pose,
                                struct rb_world_light *out, uint32_t cap);
 
-/* How many point samples stand for the emissive surfaces where they light as lights do (the
- * direct integrator, and the reference's direct path space): each a cube of shadow maps. */
-#define RB_SCENE_EMITTER_LIGHTS 8
+/* The most point samples that may stand for the emissive surfaces where they light as lights do
+ * (the direct integrator, and the reference's direct path space; the job's
+ * integrator.direct.emitter_lights, 8 by default): each a cube of shadow maps, which the shadow
+ * layers' budget (RB_MAX_SHADOW_LAYERS) bounds. */
+#define RB_SCENE_EMITTER_LIGHTS_MAX 8
 
-/* The emissive surfaces as RB_SCENE_EMITTER_LIGHTS lights of type RB_LIGHT_EMITTER, or none when
+/* The emissive surfaces as count (at most RB_SCENE_EMITTER_LIGHTS_MAX) lights of type
+ * RB_LIGHT_EMITTER, or none when
  * no drawn primitive has an emissive material: fixed, stratified points picked by power (each
  * triangle's area times the luminance of its emission, factor x strength x the average of its
  * emissive texture), from the pose's node transforms (skinned and morphed emitters at their bind
@@ -379,7 +382,7 @@ uint32_t rb_scene_world_lights(const struct rb_job *job, const struct rb_scene *
  * against direction, the triangle's normal) with the inverse-square falloff. Writes up to cap;
  * returns the count, the same for every pose of a scene. */
 uint32_t rb_scene_emitter_lights(const struct rb_scene *scene, const struct rb_scene_pose *pose,
-                                 struct rb_world_light *out, uint32_t cap);
+                                 uint32_t count, struct rb_world_light *out, uint32_t cap);
 
 /* Resolves the job's clip names to indices (all names must exist; none given: the first
  * animation, if any). Writes at most cap indices. */

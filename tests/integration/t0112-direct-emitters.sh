@@ -29,4 +29,15 @@ rb reference "$SCENES/$scene" "$@" --spp 64 --set integrator.reference.paths=bdp
 expect_exit 0 "$scene: the reference's bdpt path space renders"
 rb compare "$T/gpu/frame.0000.exr" "$T/quad/frame.0000.exr" --layer direct --max-relmse 0.06
 expect_exit 0 "$scene: direct's light is the quad's direct light within relMSE 0.06"
+# integrator.direct.emitter_lights 0: the emitters light nothing again (the quad's own emission
+# stays), and the reference's direct path space follows the same setting.
+rb render "$SCENES/$scene" --integrator direct "$@" --out "$T/none" \
+    --set integrator.direct.emitter_lights=0
+expect_exit 0 "$scene: direct renders without emitter samples"
+rb compare "$T/none/frame.0000.exr" "$T/quad/frame.0000.exr" --layer direct --max-relmse 0.06
+expect_exit 1 "$scene: without emitter samples the room is not the quad's direct light"
+rb reference "$SCENES/$scene" "$@" --spp 1 --set integrator.reference.paths=direct \
+    --set integrator.direct.emitter_lights=0 --out "$T/ref0"
+rb compare "$T/none/frame.0000.exr" "$T/ref0/frame.0000.exr" --max-relmse 2e-3
+expect_exit 0 "$scene: the reference's direct path space without emitter samples agrees"
 done_testing
