@@ -84,7 +84,7 @@ check "the reference frame is 32x18" grep -qx 'size: 32x18' "$T/stdout"
 # Files that are not there or are not images.
 rb info "$T/nope.exr"
 expect_exit 2 "a missing file exits 2"
-stderr_has "cannot read '$T/nope.exr': No such file or directory" "the missing file is named"
+stderr_has "cannot open '$T/nope.exr': No such file or directory" "the missing file is named"
 check "nothing went to stdout for the missing file" test ! -s "$T/stdout"
 printf 'notes, not an image\n' >"$T/notes.txt"
 rb info "$T/notes.txt"
@@ -96,7 +96,7 @@ expect_exit 2 "a text file named .exr exits 2"
 stderr_has "cannot read '$T/fake.exr'" "the false EXR is named"
 rb info "$f" "$T/nope.exr" "$T/ref/frame.0001.exr"
 expect_exit 2 "a missing file among good ones exits 2"
-stderr_has "cannot read '$T/nope.exr'" "the missing one is named"
+stderr_has "cannot open '$T/nope.exr'" "the missing one is named"
 check "the good files are still printed" test "$(grep -c '^path: ' "$T/stdout")" -eq 2
 
 done_testing
