@@ -84,8 +84,9 @@ frame_times() {
         i=$((i + 1))
         dir="$out/$1/$name"
         for integrator in direct bdpt hybrid; do
+            # (direct without its emitter samples, punctual lights only: see bench-bdpt.sh)
             render "$job" "$dir/$integrator" --integrator "$integrator" --size "$1" \
-                --frames "0-$last"
+                --frames "0-$last" --set integrator.direct.emitter_lights=0
         done
         pass_medians "" "$dir"/hybrid/frame.*.timing.json | awk -v i="$i" '{ print i, $2, $4 }'
         for integrator in hybrid direct bdpt; do

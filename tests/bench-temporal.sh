@@ -40,8 +40,10 @@ echo "temporal bench: bdpt with 4 caches (integrator.bdpt.caches) against 1, and
 # ---- 1. frame time ---------------------------------------------------------------------------
 
 for run in direct:1 bdpt:4 bdpt:1; do
+    # (direct without its emitter samples, punctual lights only: see bench-bdpt.sh)
     "$RB" render jobs/demo.yaml --integrator "${run%:*}" --size "$size" --frames 4-8 -q \
-        --set integrator.bdpt.caches="${run#*:}" --out "$out/time-$run" </dev/null >/dev/null
+        --set integrator.bdpt.caches="${run#*:}" --set integrator.direct.emitter_lights=0 \
+        --out "$out/time-$run" </dev/null >/dev/null
 done
 w() { field wall_ms "$out/time-$1"/frame.*.timing.json | median; }
 g() { field gpu_total_ms "$out/time-$1"/frame.*.timing.json | median; }

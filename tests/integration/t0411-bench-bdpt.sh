@@ -21,7 +21,7 @@ x='[0-9][0-9.e+-]*'
 for scene in demo cornell-box CornellBox; do
     stdout_has "^bdpt $scene 32x18 pass connect  *median  *$x ms gpu (2 a frame)$" \
         "$scene: bdpt's passes, bundle by bundle"
-    stdout_has "^bdpt $scene 32x18 frame: wall $x ms, GPU passes $x ms; direct frame: wall $x ms, GPU passes $x ms$" \
+    stdout_has "^bdpt $scene 32x18 frame: wall $x ms, GPU passes $x ms; direct frame (no emitter samples): wall $x ms, GPU passes $x ms$" \
         "$scene: both frames' times"
     stdout_has "^bdpt $scene 32x18 bdpt / direct: $x wall, $x GPU passes" "$scene: their ratio"
     stdout_has "^bdpt $scene 32x18 relMSE $x (indirect layer $x) in $x s; reference 4 spp in $x s$" \
