@@ -55,6 +55,24 @@ void copy_name(char *dst, size_t size, const char *src)
         std::snprintf(dst, size, "%s", src);
 }
 
+/* The config at config_path, validated, into config, and the display (the config's default
+ * when none is set) into disp; RB_OCIO_OK, or a failure with the displays it has. Throws what
+ * OpenColorIO throws, for the callers' catch. */
+int open_display(const char *config_path, const char *display, const std::string &where,
+                 OCIO::ConstConfigRcPtr &config, std::string &disp, char *msg, size_t msg_size)
+{
+    config = OCIO::Config::CreateFromFile(config_path);
+    config->validate();
+    disp = is_set(display) ? display : config->getDefaultDisplay();
+    for (int i = 0; i < config->getNumDisplays(); i++)
+        if (disp == config->getDisplay(i))
+            return RB_OCIO_OK;
+    return fail(msg, msg_size,
+                "ocio: display '" + disp + "' not found in " + where +
+                    " (has: " + join_displays(config) + ")",
+                RB_OCIO_NO_NAME);
+}
+
 } // namespace
 
 extern "C" const char *rb_ocio_version(void) noexcept
@@ -69,21 +87,14 @@ extern "C" int rb_ocio_display_view_apply(const char *config_path, const char *d
 {
     const std::string where = std::string("config '") + config_path + "'";
     try {
-        OCIO::ConstConfigRcPtr config = OCIO::Config::CreateFromFile(config_path);
-        config->validate();
-
-        std::string disp = is_set(display) ? display : config->getDefaultDisplay();
-        bool found = false;
-        for (int i = 0; i < config->getNumDisplays() && !found; i++)
-            found = disp == config->getDisplay(i);
-        if (!found)
-            return fail(msg, msg_size,
-                        "ocio: display '" + disp + "' not found in " + where +
-                            " (has: " + join_displays(config) + ")",
-                        RB_OCIO_NO_NAME);
+        OCIO::ConstConfigRcPtr config;
+        std::string disp;
+        int rc = open_display(config_path, display, where, config, disp, msg, msg_size);
+        if (rc != RB_OCIO_OK)
+            return rc;
 
         std::string v = is_set(view) ? view : config->getDefaultView(disp.c_str());
-        found = false;
+        bool found = false;
         for (int i = 0; i < config->getNumViews(disp.c_str()) && !found; i++)
             found = v == config->getView(disp.c_str(), i);
         if (!found)
@@ -116,17 +127,11 @@ extern "C" int rb_ocio_view_names(const char *config_path, const char *display, 
 {
     const std::string where = std::string("config '") + config_path + "'";
     try {
-        OCIO::ConstConfigRcPtr config = OCIO::Config::CreateFromFile(config_path);
-        config->validate();
-        std::string disp = is_set(display) ? display : config->getDefaultDisplay();
-        bool found = false;
-        for (int i = 0; i < config->getNumDisplays() && !found; i++)
-            found = disp == config->getDisplay(i);
-        if (!found)
-            return fail(msg, msg_size,
-                        "ocio: display '" + disp + "' not found in " + where +
-                            " (has: " + join_displays(config) + ")",
-                        RB_OCIO_NO_NAME);
+        OCIO::ConstConfigRcPtr config;
+        std::string disp;
+        int rc = open_display(config_path, display, where, config, disp, msg, msg_size);
+        if (rc != RB_OCIO_OK)
+            return rc;
         std::string list;
         for (int i = 0; i < config->getNumViews(disp.c_str()); i++)
             list += std::string(config->getView(disp.c_str(), i)) + "\n";
