@@ -726,6 +726,24 @@ enum rb_status rb_analysis_flip_exposures_compute(const float *ref_rgb, uint32_t
     return RB_OK;
 }
 
+/* The finished error map to the caller: its pooled figures into out and a copy into error_map,
+ * each when asked for. */
+static enum rb_status hand_over(const float *map, uint32_t width_px, uint32_t height_px,
+                                struct rb_analysis_flip_stats *out, float *error_map,
+                                struct rb_err *err)
+{
+    if (out) {
+        struct rb_analysis_flip_stats s;
+        enum rb_status st = rb_analysis_flip_pool(map, width_px, height_px, &s, err);
+        if (st)
+            return st;
+        *out = s;
+    }
+    if (error_map)
+        memcpy(error_map, map, (size_t)width_px * height_px * sizeof(float));
+    return RB_OK;
+}
+
 enum rb_status rb_analysis_flip_ldr(const float *test_rgb, const float *ref_rgb, uint32_t width_px,
                                     uint32_t height_px, const struct rb_analysis_flip_desc *desc,
                                     float *error_map, struct rb_analysis_flip_stats *out,
@@ -748,13 +766,7 @@ enum rb_status rb_analysis_flip_ldr(const float *test_rgb, const float *ref_rgb,
         goto out;
     }
     evaluate(&k, test_rgb, ref_rgb, &(struct xform){.is_hdr = false}, map);
-    struct rb_analysis_flip_stats s;
-    if (out && (st = rb_analysis_flip_pool(map, width_px, height_px, &s, err)))
-        goto out;
-    if (out)
-        *out = s;
-    if (error_map)
-        memcpy(error_map, map, k.n * sizeof(float));
+    st = hand_over(map, width_px, height_px, out, error_map, err);
 out:
     free(map);
     work_release(&k);
@@ -816,13 +828,8 @@ enum rb_status rb_analysis_flip_hdr(const float *test_rgb, const float *ref_rgb,
             if (tmp[p] > map[p])
                 map[p] = tmp[p];
     }
-    struct rb_analysis_flip_stats s;
-    if (out && (st = rb_analysis_flip_pool(map, width_px, height_px, &s, err)))
+    if ((st = hand_over(map, width_px, height_px, out, error_map, err)))
         goto out;
-    if (out)
-        *out = s;
-    if (error_map)
-        memcpy(error_map, map, k.n * sizeof(float));
     if (exposures)
         *exposures = e;
 out:
