@@ -296,8 +296,7 @@ static int print_json(const struct options *o, const struct rb_analysis_flicker 
     return rc;
 }
 
-static void print_csv(const struct rb_analysis_flicker *f, const struct rb_analysis_flicker *base,
-                      const struct rb_analysis_flicker_gate *g)
+static void print_csv(const struct rb_analysis_flicker *f, const struct rb_analysis_flicker *base)
 {
     char a[32], b[32], c[32], d[32], e[32], x[32];
     uint64_t compared = 0, disoccluded = 0, offscreen = 0;
@@ -322,7 +321,6 @@ static void print_csv(const struct rb_analysis_flicker *f, const struct rb_analy
            num(d, sizeof(d), f->reference_summary.warped_error, ""),
            num(e, sizeof(e), f->reference_summary.static_variance, ""), base ? "," : "",
            base ? num(x, sizeof(x), base->summary.warped_error, "") : "");
-    (void)g;
 }
 
 /* A pixel count as a percentage of the frame. */
@@ -440,7 +438,7 @@ int cmd_flicker(int argc, char **argv)
             goto out;
         }
     } else if (o.format == FORMAT_CSV) {
-        print_csv(f, base, &gate);
+        print_csv(f, base);
     } else {
         print_text(f);
         if (base)
