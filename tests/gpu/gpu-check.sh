@@ -391,6 +391,17 @@ info() {
     return $st
 }
 
+# info_probe FILE: the first `raybundle info`, with the loader's own driver search. Where it
+# lists no device but an NVIDIA driver manifest is there, it is a probe, not a failure: the
+# check lends that driver next (container images carry the driver without a loader or libglvnd).
+info_probe() {
+    info "$1" && return 0
+    local icd
+    icd=$(nvidia_icd) || return 1
+    note="$note where the loader looks; next: the NVIDIA driver of $icd"
+    return 0
+}
+
 # The NVIDIA Vulkan driver, when the loader found no GPU: the first nvidia_icd.json of the
 # places container images put it, its library made findable (an absolute path in a copy of the
 # manifest, its folder on LD_LIBRARY_PATH when ldconfig does not know it), and the libraries it
@@ -490,7 +501,7 @@ fn_step setup/unpack unpack || fatal "the tarball does not run"
 fn_step setup/loader loader
 fn_step setup/version run_version || fatal "the tarball does not run"
 fn_step setup/layer layer
-fn_step setup/info info info.txt
+fn_step setup/info info_probe info.txt
 if ! R pick "$scratch/info.txt" >/dev/null 2>&1; then
     # No GPU listed: the NVIDIA driver where container images put it, if it is there.
     if nvidia_icd >/dev/null && fn_step setup/nvidia-driver nvidia_driver; then
