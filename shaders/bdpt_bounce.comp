@@ -17,7 +17,6 @@
 #include "brdf.glsl"
 #include "view.glsl"
 #include "bdpt_views.glsl"
-#include "bdpt_vpl.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -31,6 +30,9 @@ layout(std430, binding = RB_BIND_BDPT_BOUNCE_VPL_DRAWS) writeonly buffer VplDraw
 layout(std430, binding = RB_BIND_BDPT_BOUNCE_SAMPLES) readonly buffer Samples { rb_gpu_bdpt_sample samples[]; };
 layout(std430, binding = RB_BIND_BDPT_BOUNCE_PROBE_DRAWS) writeonly buffer ProbeDraws { uint probe_draws[]; };
 layout(push_constant) uniform Push { rb_gpu_bdpt_bounce_push pc; };
+
+#define RB_BDPT_LEAST_ROUGHNESS pc.brdf.x
+#include "bdpt_vpl.glsl"
 
 void main()
 {

@@ -26,7 +26,6 @@
 #include "encode.glsl"
 #include "lights.glsl"
 #include "view.glsl"
-#include "bdpt_vpl.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -52,6 +51,9 @@ layout(binding = RB_BIND_BDPT_CONNECT_LIGHT + RB_BDPT_INDIRECT_DIFFUSE, rgba32f)
 layout(binding = RB_BIND_BDPT_CONNECT_LIGHT + RB_BDPT_INDIRECT_SPECULAR, rgba32f) uniform image2D a_indirect_specular;
 layout(std430, binding = RB_BIND_BDPT_CONNECT_EMIT_INFO) readonly buffer EmitInfo { rb_gpu_bdpt_emit_info emit_info; };
 layout(push_constant) uniform Push { rb_gpu_bdpt_connect_push pc; };
+
+#define RB_BDPT_LEAST_ROUGHNESS pc.brdf.x
+#include "bdpt_vpl.glsl"
 
 #include "shadow.glsl"
 #include "bundle_search.glsl"

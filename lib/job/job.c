@@ -223,6 +223,10 @@ static const struct key keys[] = {
       "of one over the scene diagonal squared; 0: no clamp"),
     K("integrator.bdpt.vpl_bias", KT_FLOAT, JOB(integrator.bdpt.vpl_bias), 0, NOHI, "0.01", 0,
       "bdpt: VPL shadow-map depth bias as a fraction of the distance to the VPL"),
+    K("integrator.bdpt.min_roughness", KT_FLOAT, JOB(integrator.bdpt.min_roughness), 0, 1, "0.5", 0,
+      "bdpt: least roughness of the BRDF at a VPL and where a bundle lands (not at the camera's "
+      "surface): a glossy VPL throws a bright spot; raising this trades the spot for a bias; 0: "
+      "every material as it is"),
     K("integrator.bdpt.view_triangles", KT_UINT, JOB(integrator.bdpt.view_triangles), 0, UINT32_MAX,
       "50000", 0,
       "bdpt: triangle budget of the simplified mesh the small views draw; 0: the full mesh"),
@@ -1372,6 +1376,7 @@ void rb_job_rehash(struct rb_job *job)
         h = h_f32(h, b->filter_normal);
         h = h_f32(h, b->clamp);
         h = h_f32(h, b->vpl_bias);
+        h = h_f32(h, b->min_roughness);
         h = h_u32(h, b->view_triangles);
         h = h_u32(h, (uint32_t)b->strategies);
         h = h_u32(h, b->caches);

@@ -166,6 +166,8 @@ struct rb_job {
             float clamp;               /* bound on G(z1, z2) of two-bounce paths, times the
                                         * scene's diagonal squared; 0: none; default 100 */
             float vpl_bias;            /* VPL shadow-map depth bias, fraction of distance */
+            float min_roughness;       /* the least roughness of the BRDF at a VPL or a bundle's
+                                        * hit (path regularization); 0: as the material has it */
             uint32_t view_triangles;   /* triangle budget of the small views' simplified mesh;
                                         * 0: the full mesh; default 50000 */
             enum rb_bdpt_strategies strategies;

@@ -346,6 +346,7 @@ void rb_pass_bdpt_bounce_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     struct rb_gpu_bdpt_bounce_push pc = {
         .counts = {k, round * k, (round + 1) * k, round == 0 && b->has_chain},
         .scene = {b->scene_centre[0], b->scene_centre[1], b->scene_centre[2], b->scene_radius},
+        .brdf = {b->min_roughness, 0.0f, 0.0f, 0.0f},
     };
     push(cmd, &p->bounce, &pc, sizeof(pc));
     vkCmdDispatch(cmd, groups(b->vpl_count, 64), 1, 1);
@@ -448,6 +449,7 @@ void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
         .bounce = {b->has_bounce && k < b->vpl_count ? b->vpl_count + k : RB_NONE,
                    b->has_chain && k < b->vpl_count ? 2 * b->vpl_count + k : RB_NONE,
                    b->bounce_vpl_size_px, 0},
+        .brdf = {b->min_roughness, 0.0f, 0.0f, 0.0f},
     };
     push(cmd, &p->connect, &pc, sizeof(pc));
     vkCmdDispatch(cmd, groups(b->sub_width_px, 8), groups(b->sub_height_px, 8), 1);

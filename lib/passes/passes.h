@@ -28,8 +28,8 @@ _Static_assert(sizeof(struct rb_gpu_bdpt_sample) == 32, "bdpt sample layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_emitter) == 16, "bdpt emitter layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_emit_info) == 16, "bdpt emitter summary layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_generate_push) == 48, "generate push constants");
-_Static_assert(sizeof(struct rb_gpu_bdpt_connect_push) == 80, "connect push constants");
-_Static_assert(sizeof(struct rb_gpu_bdpt_bounce_push) == 32, "bounce push constants");
+_Static_assert(sizeof(struct rb_gpu_bdpt_connect_push) == 96, "connect push constants");
+_Static_assert(sizeof(struct rb_gpu_bdpt_bounce_push) == 48, "bounce push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_emitters_push) == 16, "emitters push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_image_push) == 32, "split/gather/filter push constants");
 _Static_assert(sizeof(struct rb_gpu_hybrid_slot) == 32, "hybrid ray slot layout");
@@ -341,8 +341,9 @@ struct rb_bdpt_frame {
     uint32_t bounce_vpl_size_px; /* the bounce VPLs' maps: a corner of their vpl_maps layers */
     uint32_t filter_radius_px;
     float filter_depth, filter_normal;
-    float clamp_g;  /* the bound on G of a VPL connection, in 1/m^2; 0: none */
-    float vpl_bias; /* fraction of the distance */
+    float clamp_g;       /* the bound on G of a VPL connection, in 1/m^2; 0: none */
+    float vpl_bias;      /* fraction of the distance */
+    float min_roughness; /* the least roughness at a VPL and a bundle's hit (bdpt_vpl.glsl) */
     enum rb_bdpt_strategies strategies;
     float scene_centre[3], scene_radius; /* the job's bounds */
     uint32_t emitter_count;              /* emissive triangles */

@@ -105,6 +105,7 @@ struct rb_gpu_bdpt_connect_push {
     RB_UVEC4(bounce);  /* x: the index of VPL k's bounce (K_v + k), or RB_NONE where the frame
                         * has none; y: its bounce's (2 K_v + k), or RB_NONE; z: the bounce
                         * VPLs' map size (the corner of their layers they fill); w: unused */
+    RB_VEC4(brdf);     /* x: the least roughness of a VPL's or a bundle hit's BRDF; yzw: unused */
 };
 
 /* Push constants of bdpt_emitters.comp. */
@@ -117,6 +118,7 @@ struct rb_gpu_bdpt_bounce_push {
     RB_UVEC4(counts); /* K_v; src, the first VPL probed (0 or K_v); dst, where its bounces go
                        * (K_v or 2 K_v); whether the emitters' bounces probe for a next round */
     RB_VEC4(scene);   /* xyz: the centre of the job's bounds; w: their radius */
+    RB_VEC4(brdf);    /* x: the least roughness of a VPL's BRDF; yzw: unused */
 };
 
 /* Spatial interleaving (seed 000, A.1): at most this many sub-images along each axis, and a
