@@ -414,7 +414,7 @@ static int apply_cli(const struct options *o, struct rb_job *job)
                       "'%s' (use 'raybundle reference')",
                       opt,
                       rb_integrator_name(job->integrator.name ? job->integrator.name
-                                                              : RB_INTEGRATOR_DIRECT));
+                                                              : RB_INTEGRATOR_BDPT));
             return -1;
         }
     }

@@ -11,7 +11,7 @@ BUILD=${BUILD:-build}
 out=$(mktemp -d "${TMPDIR:-/tmp}/raybundle-bench.XXXXXX")
 trap 'rm -rf "$out"' EXIT
 start=$(date +%s.%N)
-/usr/bin/time -f '%M' -o "$out/rss" "$BUILD/raybundle" render jobs/demo.yaml \
+/usr/bin/time -f '%M' -o "$out/rss" "$BUILD/raybundle" render jobs/demo.yaml --integrator direct \
     --size 640x360 --frames 0-23 --out "$out" -q
 end=$(date +%s.%N)
 frames=24
@@ -31,7 +31,7 @@ echo "peak resident memory: $(cat "$out/rss") KiB"
 # compared pass by pass; expect "same" everywhere (a verdict otherwise is the machine's drift
 # between the sets, beyond the 5% threshold).
 for set in base new; do
-    "$BUILD/raybundle" bench jobs/demo.yaml --size 160x90 --frames 0-3 --runs 9 \
+    "$BUILD/raybundle" bench jobs/demo.yaml --integrator direct --size 160x90 --frames 0-3 --runs 9 \
         --out "$out/bench-$set" -q >/dev/null
 done
 echo "timing compare of this build against itself (demo 160x90, 4 frames, 9 runs a set):"

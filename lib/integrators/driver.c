@@ -16,8 +16,8 @@
 static const struct rb_integrator_ops *ops_for(enum rb_integrator_kind kind)
 {
     switch (kind) {
-    case RB_INTEGRATOR_DEFAULT:
     case RB_INTEGRATOR_DIRECT: return &rb_integrator_direct;
+    case RB_INTEGRATOR_DEFAULT:
     case RB_INTEGRATOR_BDPT: return &rb_integrator_bdpt;
     case RB_INTEGRATOR_HYBRID: return &rb_integrator_hybrid;
     default: return NULL;

@@ -180,7 +180,7 @@ static const struct key keys[] = {
       "multiplier for the map or color"),
     K("environment.rotation_deg", KT_FLOAT, JOB(environment.rotation_deg), NOLO, NOHI, "0", 0,
       "rotation of the map about +Y in degrees"),
-    K("integrator.name", KT_ENUM, JOB(integrator.name), NOLO, NOHI, "direct", 0,
+    K("integrator.name", KT_ENUM, JOB(integrator.name), NOLO, NOHI, "bdpt", 0,
       "the light transport algorithm", ENUM(integrator_names)),
     K("integrator.direct.shadow_size", KT_UINT, JOB(integrator.direct.shadow_size_px), 16, 8192,
       "1024", 0, "shadow map size in pixels (per cube face for point lights)"),
@@ -1197,8 +1197,7 @@ static enum rb_status validate(struct ctx *c)
     /* samples and tiles say how the hybrid integrator sampled each pixel (and the reference
      * its fixed count); direct and bdpt keep no such counts, and a layer of zeros would claim
      * that they took no samples. */
-    enum rb_integrator_kind kind =
-        job->integrator.name ? job->integrator.name : RB_INTEGRATOR_DIRECT;
+    enum rb_integrator_kind kind = job->integrator.name ? job->integrator.name : RB_INTEGRATOR_BDPT;
     for (uint32_t l = RB_LAYER_SAMPLES; l <= RB_LAYER_TILES; l++)
         if ((job->layer_mask & (1u << l)) && kind != RB_INTEGRATOR_HYBRID &&
             kind != RB_INTEGRATOR_REFERENCE)
@@ -1338,8 +1337,7 @@ void rb_job_rehash(struct rb_job *job)
     h = h_f32(h, job->environment.intensity);
     h = h_f32(h, job->environment.rotation_deg);
 
-    enum rb_integrator_kind kind =
-        job->integrator.name ? job->integrator.name : RB_INTEGRATOR_DIRECT;
+    enum rb_integrator_kind kind = job->integrator.name ? job->integrator.name : RB_INTEGRATOR_BDPT;
     h = h_u32(h, (uint32_t)kind);
     /* Only the named integrator's settings: a frame does not depend on another's. */
     if (kind == RB_INTEGRATOR_REFERENCE) {
@@ -1580,7 +1578,7 @@ const char *rb_job_yaml_version(void)
 const char *rb_integrator_name(enum rb_integrator_kind kind)
 {
     if (kind == RB_INTEGRATOR_DEFAULT)
-        kind = RB_INTEGRATOR_DIRECT;
+        kind = RB_INTEGRATOR_BDPT;
     if ((size_t)kind < COUNT(integrator_names))
         return integrator_names[kind];
     return "unknown";

@@ -9,7 +9,7 @@
 #include <stdio.h>
 
 enum rb_integrator_kind {
-    RB_INTEGRATOR_DEFAULT = 0, /* resolves to DIRECT */
+    RB_INTEGRATOR_DEFAULT = 0, /* resolves to BDPT */
     RB_INTEGRATOR_DIRECT,
     RB_INTEGRATOR_BDPT,
     RB_INTEGRATOR_HYBRID,

@@ -10,7 +10,7 @@ tour="$T/tour"
 sed -n '/^## A tour$/,/^## /p' README.md | sed -n 's/^    //p' >"$T/commands"
 count=$(wc -l <"$T/commands")
 check "the README's tour has its commands ($count)" test "$count" -ge 10
-for what in "render jobs/demo.yaml --preview" "--integrator bdpt" "--integrator hybrid" \
+for what in "render jobs/demo.yaml --preview" "--integrator direct" "--integrator hybrid" \
     "raybundle reference" "raybundle compare" "raybundle flicker" "raybundle report" \
     "raybundle bench" "raybundle timing compare" "--chunk"; do
     check "the tour shows '$what'" grep -qF -- "$what" "$T/commands"
@@ -39,12 +39,12 @@ while IFS= read -r cmd; do
     fi
 done <"$T/commands"
 
-for dir in demo bdpt hybrid reference chunks; do
+for dir in demo hybrid direct reference chunks; do
     check "out/$dir has the sequence's last frame" test -f "$tour/out/$dir/frame.0047.exr"
 done
 check "out/bench-before and out/bench-after hold their runs" \
     test -f "$tour/out/bench-before/bench.json" -a -f "$tour/out/bench-after/bench.json"
-check "out/bdpt.html is written" test -s "$tour/out/bdpt.html"
+check "out/demo.html is written" test -s "$tour/out/demo.html"
 check "nothing is written outside out/" \
     sh -c "cd '$tour' && [ \"\$(ls | sort | tr '\n' ' ')\" = 'build jobs out ' ]"
 

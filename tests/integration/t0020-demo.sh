@@ -18,7 +18,7 @@ for ch in R G B A direct.R direct.G direct.B indirect.R indirect.G indirect.B al
     motion.X motion.Y; do
     check "channel $ch is present" grep -q "[ ,]$ch[,\" ]\|[ ,]$ch\$" "$T/info"
 done
-for attr in worldToCamera worldToNDC chromaticities 'raybundle:integrator: "direct"' \
+for attr in worldToCamera worldToNDC chromaticities 'raybundle:integrator: "bdpt"' \
     'raybundle:frame: 2' 'raybundle:jobHash'; do
     check "attribute '$attr' is present" grep -qF "$attr" "$T/info"
 done
@@ -45,4 +45,16 @@ tap_run "$BUILD/tests/tools/exrstat" "$T/demo/frame.0000.png" A 0.999
 
 # The picture is not empty: the room is lit.
 tap_run "$BUILD/tests/tools/exrstat" "$T/demo/frame.0000.exr" R 0.01
+
+# The demo is the seeds' system: bdpt by its own lights, no fill light added by the job, and
+# its global illumination shows (the faces turned from both lights get the walls' light).
+check "the demo job renders with bdpt" grep -qx 'integrator: {name: bdpt}' jobs/demo.yaml
+check "the demo job adds no light of its own" sh -c "! grep -q '^lights:' jobs/demo.yaml"
+tap_run "$BUILD/tests/tools/exrstat" "$T/demo/frame.0002.exr" indirect.R 0.01
+# The same shot with hybrid, a shipped job of its own.
+rb render jobs/demo-hybrid.yaml --frames 0-1 --size 64x36 --out "$T/hybrid" -q
+expect_exit 0 "jobs/demo-hybrid.yaml renders"
+check "jobs/demo-hybrid.yaml renders with hybrid" sh -c \
+    "oiiotool --info -v '$T/hybrid/frame.0001.exr' | grep -qF 'raybundle:integrator: \"hybrid\"'"
+tap_run "$BUILD/tests/tools/exrstat" "$T/hybrid/frame.0001.exr" indirect.R 0.01
 done_testing

@@ -14,7 +14,7 @@ same_as_whole() {
     dir=$1
     shift
     want=$(for f in "$@"; do printf 'frame.%04d.exr\n' "$f"; done)
-    have=$(cd "$dir" && ls frame.*.exr 2>/dev/null)
+    have=$(cd "$dir" && ls 2>/dev/null | grep -E '^frame\.[0-9]+\.exr$')
     check "$dir: frames $*" test "$want" = "$have"
     for f in "$@"; do
         name=$(printf 'frame.%04d.exr' "$f")

@@ -31,8 +31,9 @@ GLTF
 write_scene "$T/lit.gltf" "[0, 1]"
 write_scene "$T/floor.gltf" "[0]"
 # A job looking down at the floor's centre; the floor's centre is the image's centre.
-write_job() { # write_job NAME SCENE [EXTRA-YAML]
+write_job() { # write_job NAME SCENE [EXTRA-YAML]: a direct-light job
     printf 'scene: %s\noutput: %s/f.####.exr\nresolution: [64, 48]\nframes: {start: 0, end: 0}\n'         "$2" "$1" >"$T/$1.yaml"
+    printf 'integrator: {name: direct}\n' >>"$T/$1.yaml"
     printf 'camera: {keys: [{t: 0, position: [0, 3, 0.01], look_at: [0, 0, 0]}]}\n%s\n'         "${3:-}" >>"$T/$1.yaml"
 }
 centre() { # centre EXR CHANNEL: the value at the image's centre

@@ -9,7 +9,8 @@
 
 # render WxH DIR: frame 0 of the demo, with small shadow maps to keep it quick.
 render() {
-    rb render jobs/demo.yaml --frames 0 --size "$1" --set integrator.direct.shadow_size=256 \
+    rb render jobs/demo.yaml --integrator direct --frames 0 --size "$1" \
+        --set integrator.direct.shadow_size=256 \
         --out "$T/$2" --validate -q
 }
 

@@ -8,20 +8,20 @@ G=tests/golden/direct
 same_pixels() { # same_pixels GOLDEN NEW: every channel of every pixel identical
     idiff -fail 0 -failpercent 0 -warn 0 "$1" "$2" >"$T/idiff" 2>&1
 }
-rb render jobs/demo.yaml --frames 0-7 --size 160x90 --out "$T/demo" -q
+rb render jobs/demo.yaml --integrator direct --frames 0-7 --size 160x90 --out "$T/demo" -q
 expect_exit 0 "the demo renders frames 0-7"
 for f in 0000 0001 0007; do
     check "demo frame $f: the golden pixels" same_pixels "$G/demo.$f.exr" "$T/demo/frame.$f.exr"
 done
 # A chunk starts with warm-up frames: frame 7 alone is the golden frame 7 too.
-rb render jobs/demo.yaml --frames 7 --size 160x90 --out "$T/seven" -q
+rb render jobs/demo.yaml --integrator direct --frames 7 --size 160x90 --out "$T/seven" -q
 check "demo frame 7 rendered alone: the golden pixels" \
     same_pixels "$G/demo.0007.exr" "$T/seven/frame.0007.exr"
 check "the comparison can fail: frames 0 and 7 differ" \
     sh -c "! idiff -fail 0 -failpercent 0 -warn 0 '$G/demo.0000.exr' '$G/demo.0007.exr' >/dev/null 2>&1"
 
 # The job's layers: only those are packed, read back and written, with the same values.
-rb render jobs/demo.yaml --frames 0-3 --size 160x90 --out "$T/two" -q --set 'layers=[normal, depth]'
+rb render jobs/demo.yaml --integrator direct --frames 0-3 --size 160x90 --out "$T/two" -q --set 'layers=[normal, depth]'
 expect_exit 0 "the demo renders with two layers"
 check "two layers: the EXR holds the beauty, depth and normal only" sh -c \
     "oiiotool --info -v '$T/two/frame.0003.exr' | grep -qx '    channel list: R, G, B, A, depth.Z, normal.X, normal.Y, normal.Z'"

@@ -44,7 +44,7 @@ agree() { # agree NAME JOB ARGS...
     name=$1
     job=$2
     shift 2
-    rb render "$job" "$@" --out "$T/$name-gpu" -q
+    rb render "$job" "$@" --integrator direct --out "$T/$name-gpu" -q
     expect_exit 0 "$name: GPU direct renders"
     rb reference "$job" "$@" --spp 1 --set integrator.reference.paths=direct --out "$T/$name-ref" -q
     expect_exit 0 "$name: reference (direct path space) renders"
@@ -95,6 +95,7 @@ camera:
   fov_y_deg: 100
   keys: [{t: 0, position: [0, 1, 0], look_at: [0.3, 5, 1.2]}]
 environment: {map: sky.exr, intensity: 1.5, rotation_deg: 30}
+integrator: {name: direct}
 YAML
 rb render "$T/sky.yaml" --out "$T/sky-gpu" -q
 expect_exit 0 "sky: GPU renders"
@@ -141,6 +142,7 @@ camera:
   fov_y_deg: 40
   keys: [{t: 0, position: [0.25, 0.03, 0.12], look_at: [0, 0.03, 0]}]
 lights: [{type: directional, direction: [-1, -0.3, -0.3], intensity: 3}]
+integrator: {name: direct}
 YAML
     }
     bottle_job bottle "$wb/WaterBottle.gltf"

@@ -50,7 +50,7 @@ check "with every layer, the default layers keep their bits" same_channels "$T/b
     R,G,B,A,direct.R,direct.G,direct.B,indirect.R,indirect.G,indirect.B,albedo.R,albedo.G,albedo.B,normal.X,normal.Y,normal.Z,depth.Z,motion.X,motion.Y
 check "with every layer, the parts still add up to indirect" sum "$T/all/frame.0000.exr" 1e-6
 
-rb render jobs/demo.yaml $small --out "$T/d" --set "$parts"
+rb render jobs/demo.yaml $small --integrator direct --out "$T/d" --set "$parts"
 expect_exit 0 "the direct integrator writes the parts too"
 sum "$T/d/frame.0000.exr" 0
 check "the direct integrator has no indirect light: both parts are zero" sh -c \

@@ -35,7 +35,7 @@ check "a failed report writes nothing" test ! -e "$T/r.html"
 
 # ---- a sequence and its reference ----------------------------------------------------------
 
-rb render jobs/demo.yaml --size 64x36 --frames 0-3 --out "$T/seq" --preview -q
+rb render jobs/demo.yaml --integrator direct --size 64x36 --frames 0-3 --out "$T/seq" --preview -q
 expect_exit 0 "render 4 frames of the demo"
 rb reference jobs/demo.yaml --size 64x36 --frames 0-3 --spp 4 --out "$T/ref" -q
 expect_exit 0 "render their reference"

@@ -205,7 +205,8 @@ static int write_scene(const char *dir, const char *name, double metallic, doubl
     return fclose(f) != 0;
 }
 
-/* One job over scene with this tool's camera, lit by the given `lights:` items. */
+/* One job over scene with this tool's camera, lit by the given `lights:` items: direct light,
+ * which the closed forms give. */
 static int write_job(const char *dir, const char *name, const char *scene, const char *lights)
 {
     char path[4096];
@@ -220,6 +221,7 @@ static int write_job(const char *dir, const char *name, const char *scene, const
             "output: %s/frame.####.exr\n"
             "resolution: [320, 200]\n"
             "frames: {start: 0, end: 0}\n"
+            "integrator: {name: direct}\n"
             "camera:\n"
             "  fov_y_deg: %g\n"
             "  keys: [{t: 0, position: [%g, %g, %g], look_at: [%g, %g, %g]}]\n"

@@ -170,7 +170,7 @@ static void test_defaults(void **state)
     assert_vec3(job->environment.color, 0, 0, 0);
     assert_float_equal(job->environment.intensity, 1, 0);
     assert_float_equal(job->environment.rotation_deg, 0, 0);
-    assert_int_equal(job->integrator.name, RB_INTEGRATOR_DIRECT);
+    assert_int_equal(job->integrator.name, RB_INTEGRATOR_BDPT); /* the seeds' system */
     assert_int_equal(job->integrator.direct.shadow_size_px, 1024);
     assert_float_equal(job->integrator.direct.shadow_bias, 0.002f, 0);
     assert_float_equal(job->integrator.direct.pcf_radius_px, 1.5f, 0);
@@ -591,8 +591,9 @@ static void test_hash(void **state)
         {{"lights", "[{type: point}]", NULL}},
         {{"scene_lights", "false", NULL}},
         {{"environment.intensity", "2", NULL}},
-        {{"integrator.name", "bdpt", NULL}},
-        {{"integrator.direct.shadow_bias", "0.003", NULL}},
+        {{"integrator.name", "direct", NULL}},
+        {{"integrator.bdpt.vpl_bias", "0.02", NULL}},
+        {{"integrator.bdpt.min_roughness", "0.6", NULL}},
     };
     for (size_t i = 0; i < sizeof(changes) / sizeof(changes[0]); i++) {
         if (hash_of(text, changes[i], 1) == base)
@@ -622,7 +623,7 @@ static void test_integrator_names(void **state)
     }
     assert_int_equal(rb_integrator_from_name("pathtracer"), RB_INTEGRATOR_DEFAULT);
     assert_int_equal(rb_integrator_from_name(NULL), RB_INTEGRATOR_DEFAULT);
-    assert_string_equal(rb_integrator_name(RB_INTEGRATOR_DEFAULT), "direct");
+    assert_string_equal(rb_integrator_name(RB_INTEGRATOR_DEFAULT), "bdpt");
     rb_job_destroy(NULL);
 }
 
@@ -706,7 +707,7 @@ static void test_adaptive_layers(void **state)
                  "integrators only, and this job renders with 'bdpt'");
     expect_error("scene: empty.gltf\nlayers: [tiles]\n", NULL, 0, RB_E_INVALID,
                  "job.yaml:2:9: layer 'tiles' is written by the hybrid and reference integrators "
-                 "only, and this job renders with 'direct'");
+                 "only, and this job renders with 'bdpt'");
     struct rb_job_override o[] = {{"integrator.name", "bdpt", "--integrator 'bdpt'"}};
     expect_error("scene: empty.gltf\nlayers: [samples]\nintegrator: {name: hybrid}\n", o, 1,
                  RB_E_INVALID,
