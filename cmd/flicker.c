@@ -41,7 +41,8 @@ static void usage(FILE *f)
             "the warped temporal error (log luminance against the previous frame reprojected\n"
             "through the motion layer, disoccluded pixels left out) and the deviation of\n"
             "static pixels; with a reference sequence of the same job, the excess of the\n"
-            "frame-to-frame change over the reference's, and the reference's own metrics.\n"
+            "frame-to-frame change over the reference's (its RMS less the reference's noise\n"
+            "when the reference has a variance layer), and the reference's own metrics.\n"
             "\n"
             "  --reference SEQ        the reference sequence (raybundle reference --frames A-B)\n"
             "  --max-excess X         exit 1 when the mean excess temporal error exceeds X\n"
@@ -202,7 +203,7 @@ static json_t *jnum(double v)
 /* One frame's columns: the same names in JSON and CSV. */
 #define FRAME_COLUMNS                                                                              \
     "frame,warped_error,compared,disoccluded,offscreen,static_deviation,excess_error,"             \
-    "reference_warped_error,reference_static_deviation"
+    "reference_warped_error,reference_static_deviation,excess_rms"
 
 static json_t *json_frame(const struct rb_analysis_flicker_frame *fr)
 {
@@ -216,6 +217,7 @@ static json_t *json_frame(const struct rb_analysis_flicker_frame *fr)
     json_object_set_new(o, "excess_error", jnum(fr->excess_error));
     json_object_set_new(o, "reference_warped_error", jnum(fr->ref.warped_error));
     json_object_set_new(o, "reference_static_deviation", jnum(fr->ref.static_deviation));
+    json_object_set_new(o, "excess_rms", jnum(fr->excess_rms));
     return o;
 }
 
@@ -272,6 +274,8 @@ static int print_json(const struct options *o, const struct rb_analysis_flicker 
     json_object_set_new(root, "height", json_integer(f->height_px));
     json_object_set_new(root, "log_epsilon", json_real(f->desc.log_epsilon));
     json_object_set_new(root, "depth_tolerance", json_real(f->desc.depth_tolerance));
+    json_object_set_new(root, "reference_noise_corrected",
+                        f->has_reference ? json_boolean(f->is_noise_corrected) : json_null());
     for (size_t i = 0; i < f->seq.frame_count; i++) {
         json_t *fr = json_frame(&f->frames[i]);
         if (base)
@@ -285,6 +289,7 @@ static int print_json(const struct options *o, const struct rb_analysis_flicker 
     json_object_set_new(root, "gate", base ? json_gate(o, g) : json_null());
     json_object_set_new(summary, "excess_error_mean", jnum(f->excess_error));
     json_object_set_new(summary, "excess_error_max", jnum(f->excess_error_max));
+    json_object_set_new(summary, "excess_rms", jnum(f->excess_rms));
     json_object_set_new(summary, "reference",
                         f->has_reference ? json_summary(&f->reference_summary) : json_null());
     json_object_set_new(root, "summary", summary);
@@ -298,28 +303,30 @@ static int print_json(const struct options *o, const struct rb_analysis_flicker 
 
 static void print_csv(const struct rb_analysis_flicker *f, const struct rb_analysis_flicker *base)
 {
-    char a[32], b[32], c[32], d[32], e[32], x[32];
+    char a[32], b[32], c[32], d[32], e[32], r[32], x[32];
     uint64_t compared = 0, disoccluded = 0, offscreen = 0;
     puts(base ? FRAME_COLUMNS ",baseline_warped_error" : FRAME_COLUMNS);
     for (size_t i = 0; i < f->seq.frame_count; i++) {
         const struct rb_analysis_flicker_frame *fr = &f->frames[i];
-        printf("%d,%s,%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%s,%s,%s,%s%s%s\n", fr->frame,
+        printf("%d,%s,%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%s,%s,%s,%s,%s%s%s\n", fr->frame,
                num(a, sizeof(a), fr->seq.warped_error, ""), fr->seq.compared_count,
                fr->seq.disoccluded_count, fr->seq.offscreen_count,
                num(b, sizeof(b), fr->seq.static_deviation, ""),
                num(c, sizeof(c), fr->excess_error, ""), num(d, sizeof(d), fr->ref.warped_error, ""),
-               num(e, sizeof(e), fr->ref.static_deviation, ""), base ? "," : "",
+               num(e, sizeof(e), fr->ref.static_deviation, ""),
+               num(r, sizeof(r), fr->excess_rms, ""), base ? "," : "",
                base ? num(x, sizeof(x), base_error(base, fr->frame), "") : "");
         compared += fr->seq.compared_count;
         disoccluded += fr->seq.disoccluded_count;
         offscreen += fr->seq.offscreen_count;
     }
-    printf("all,%s,%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%s,%s,%s,%s%s%s\n",
+    printf("all,%s,%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%s,%s,%s,%s,%s%s%s\n",
            num(a, sizeof(a), f->summary.warped_error, ""), compared, disoccluded, offscreen,
            num(b, sizeof(b), f->summary.static_variance, ""),
            num(c, sizeof(c), f->excess_error, ""),
            num(d, sizeof(d), f->reference_summary.warped_error, ""),
-           num(e, sizeof(e), f->reference_summary.static_variance, ""), base ? "," : "",
+           num(e, sizeof(e), f->reference_summary.static_variance, ""),
+           num(r, sizeof(r), f->excess_rms, ""), base ? "," : "",
            base ? num(x, sizeof(x), base->summary.warped_error, "") : "");
 }
 
@@ -365,6 +372,10 @@ static void print_text(const struct rb_analysis_flicker *f)
         printf("%-28s mean %s, max %s\n", "excess temporal error",
                num(a, sizeof(a), f->excess_error, "-"),
                num(b, sizeof(b), f->excess_error_max, "-"));
+        printf("%-28s %s%s\n", "  RMS", num(a, sizeof(a), f->excess_rms, "-"),
+               f->is_noise_corrected ? ", less the reference's noise (its variance layer)"
+                                     : "; both count the reference's noise (it has no variance "
+                                       "layer)");
         print_summary("reference warped error", &f->reference_summary);
     }
 }

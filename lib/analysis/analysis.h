@@ -62,6 +62,12 @@ enum rb_status rb_analysis_layers_read(const char *path, const char *const *name
                                        float **out, uint32_t *width_px, uint32_t *height_px,
                                        struct rb_err *err);
 
+/* Whether the image at path has a channel of the layer name (as rb_analysis_layer_resolve names
+ * it, whatever its case) into *has. Fails as rb_analysis_layers_read does for an unreadable
+ * file; *has only on success. */
+enum rb_status rb_analysis_layer_probe(const char *path, const char *name, bool *has,
+                                       struct rb_err *err);
+
 /* ---- masks ------------------------------------------------------------------------------ */
 
 /* A mask is width*height bytes, rows top to bottom, nonzero for a pixel that is compared. */
@@ -356,8 +362,14 @@ struct rb_analysis_flicker_frame {
     struct rb_analysis_flicker_stats seq; /* the sequence */
     struct rb_analysis_flicker_stats ref; /* the reference's same frame (NaN and 0 without) */
     /* The excess temporal error: the mean over pixels of |(I_t - I_{t-1}) - (R_t - R_{t-1})|
-     * on luminance, I the sequence and R the reference; NaN without a reference or frame - 1. */
+     * on luminance, I the sequence and R the reference; NaN without a reference or frame - 1.
+     * It counts the reference's own noise. */
     double excess_error;
+    /* Its root mean square, less the reference's noise when the reference has a variance layer
+     * (rb_analysis_flicker_excess); NaN where excess_error is. */
+    double excess_rms;
+    double excess_sq_sum, excess_noise_sum; /* rb_analysis_flicker_excess's, for the summary */
+    uint64_t excess_count;                  /* the pixels in them */
 };
 
 /* A whole sequence: means over the frames that have a value (NaN where none has). */
@@ -376,7 +388,12 @@ struct rb_analysis_flicker {
     struct rb_analysis_flicker_frame *frames; /* seq.frame_count */
     struct rb_analysis_flicker_summary summary, reference_summary;
     double excess_error, excess_error_max; /* over frames; NaN without a reference */
+    /* The excess RMS over every frame's pixels: rb_analysis_flicker_excess_rms of the frames'
+     * sums (pooled before the root, not a mean of the frames'); NaN without a reference. */
+    double excess_rms;
     bool has_reference;
+    /* The reference's frames have a variance layer, and excess_rms leaves its noise out. */
+    bool is_noise_corrected;
 };
 
 /* Measures the temporal stability of desc->seq from its EXRs' beauty (R, G, B), motion
@@ -390,6 +407,28 @@ enum rb_status rb_analysis_flicker_create(const struct rb_analysis_flicker_desc 
                                           struct rb_analysis_flicker **out, struct rb_err *err);
 /* Frees f and what it owns; NULL is fine. */
 void rb_analysis_flicker_destroy(struct rb_analysis_flicker *f);
+
+/* The excess temporal error of one frame over n pixels: e = (cur - prev) - (ref - ref_prev) on
+ * luminance, over the pixels where e is finite (count of them). error is the mean of |e|;
+ * sum_sq the sum of e^2. With the variances of the reference's pixel means in its two frames
+ * (ref_var and ref_prev_var, the reference's variance layer; both NULL without it), sum_noise
+ * is the sum of ref_var + ref_prev_var over the same pixels: the two frames are independent
+ * estimates, so E[e^2] = a^2 + var R_t + var R_{t-1}, a the excess of the sequence over the
+ * truth, and sum_sq - sum_noise estimates the sum of a^2 without bias. rms is
+ * rb_analysis_flicker_excess_rms of the sums. error and rms are NaN when no e is finite. Pure. */
+struct rb_analysis_flicker_excess {
+    double error, rms;
+    double sum_sq, sum_noise; /* sum_noise is 0 without the variances */
+    uint64_t count;
+};
+struct rb_analysis_flicker_excess rb_analysis_flicker_excess(const double *cur, const double *prev,
+                                                             const double *ref,
+                                                             const double *ref_prev,
+                                                             const float *ref_var,
+                                                             const float *ref_prev_var, size_t n);
+/* sqrt(max(sum_sq - sum_noise, 0) / count): the root mean square excess less the reference's
+ * noise (0 when the noise explains it all); NaN for count 0. */
+double rb_analysis_flicker_excess_rms(double sum_sq, double sum_noise, uint64_t count);
 
 /* A gate for CI without a reference: does seq flicker more than base, the same job rendered
  * before a change? The frames both have a warped temporal error for are paired by number;

@@ -156,6 +156,20 @@ enum rb_status rb_analysis_layer_extract(const struct rb_analysis_layer *layer,
     return RB_OK;
 }
 
+enum rb_status rb_analysis_layer_probe(const char *path, const char *name, bool *has,
+                                       struct rb_err *err)
+{
+    struct rb_analysis_layer layer;
+    struct rb_io_image img = {0};
+    enum rb_status st;
+    if ((st = rb_analysis_layer_resolve(name, &layer, err)) ||
+        (st = rb_io_image_read(path, &img, err)))
+        return st;
+    *has = has_layer(&img, &layer);
+    rb_io_image_release(&img);
+    return RB_OK;
+}
+
 enum rb_status rb_analysis_layers_read(const char *path, const char *const *names, size_t count,
                                        float **out, uint32_t *width_px, uint32_t *height_px,
                                        struct rb_err *err)

@@ -4,7 +4,8 @@
  * (the previous frame reprojected through this frame's motion layer, with disoccluded pixels left
  * out by a depth test, as reverse reprojection caching detects a miss) and the deviation of the
  * static pixels from their mean over the sequence; with a reference sequence of the same job,
- * the excess of the frame-to-frame change over the reference's. The files are read through
+ * the excess of the frame-to-frame change over the reference's, and its root mean square less
+ * the reference's own noise when the reference has a variance layer. The files are read through
  * rb_analysis_layers_read; nothing here prints or knows the command line. */
 #include "analysis/analysis.h"
 
@@ -18,11 +19,12 @@
 #define LUM_B 0.0722
 
 /* One frame read: its luminance (NaN where R, G or B is not finite), log luminance, and (when
- * asked for) motion (2 floats a pixel) and depth. */
+ * asked for) motion (2 floats a pixel), depth and the variance of the luminance (a reference's
+ * variance layer). */
 struct frame {
     uint32_t width_px, height_px;
     double *lum, *log_lum;
-    float *motion, *depth;
+    float *motion, *depth, *variance;
 };
 
 static void frame_release(struct frame *f)
@@ -31,6 +33,7 @@ static void frame_release(struct frame *f)
     free(f->log_lum);
     free(f->motion);
     free(f->depth);
+    free(f->variance);
     memset(f, 0, sizeof(*f));
 }
 
@@ -81,19 +84,24 @@ void rb_analysis_flicker_destroy(struct rb_analysis_flicker *f)
     free(f);
 }
 
-/* Reads path's beauty and, with_geometry, its motion and depth into out (replacing what it
- * held), and checks its size against f's (set by the first frame read, from first_path). */
+/* Reads path's beauty and, with_geometry, its motion and depth (and, with_variance, its
+ * variance) into out (replacing what it held), and checks its size against f's (set by the first
+ * frame read, from first_path). */
 static enum rb_status read_frame(struct rb_analysis_flicker *f, const char *path,
-                                 bool with_geometry, struct frame *out, struct rb_err *err)
+                                 bool with_geometry, bool with_variance, struct frame *out,
+                                 struct rb_err *err)
 {
-    static const char *const names[] = {"beauty", "motion", "depth"};
-    float *layers[3] = {0};
+    const char *names[4] = {"beauty", "motion", "depth", "variance"};
+    float *layers[4] = {0};
+    size_t count = with_geometry ? 3 : 1;
     uint32_t w = 0, h = 0;
     frame_release(out);
-    enum rb_status st =
-        rb_analysis_layers_read(path, names, with_geometry ? 3 : 1, layers, &w, &h, err);
+    if (with_variance)
+        names[count++] = "variance";
+    enum rb_status st = rb_analysis_layers_read(path, names, count, layers, &w, &h, err);
     if (st)
         return st;
+    float *variance = with_variance ? layers[count - 1] : NULL;
     if (f->width_px && (w != f->width_px || h != f->height_px)) {
         st = rb_errf(err, RB_E_INVALID, "size mismatch: '%s' is %ux%u, '%s' is %ux%u", path, w, h,
                      f->seq.paths[0], f->width_px, f->height_px);
@@ -113,14 +121,26 @@ static enum rb_status read_frame(struct rb_analysis_flicker *f, const char *path
         out->log_lum[i] = log(fmax(out->lum[i], 0.0) + f->desc.log_epsilon);
         if (isnan(out->lum[i]))
             out->log_lum[i] = NAN; /* fmax would have taken the 0 */
+        if (variance && isfinite(y) && !(variance[i] >= 0.0f && isfinite(variance[i]))) {
+            st = rb_errf(err, RB_E_INVALID,
+                         "'%s': pixel (%zu, %zu) has variance %g, not a number >= 0 (a reference "
+                         "of one sample a pixel has no variance)",
+                         path, i % w, i / w, (double)variance[i]);
+            goto out;
+        }
     }
     out->width_px = w;
     out->height_px = h;
-    out->motion = layers[1];
-    out->depth = layers[2];
-    layers[1] = layers[2] = NULL;
+    if (with_geometry) {
+        out->motion = layers[1];
+        out->depth = layers[2];
+        layers[1] = layers[2] = NULL;
+    }
+    out->variance = variance;
+    if (with_variance)
+        layers[count - 1] = NULL;
 out:
-    for (size_t i = 0; i < 3; i++)
+    for (size_t i = 0; i < 4; i++)
         free(layers[i]);
     return st;
 }
@@ -199,21 +219,34 @@ static void update_static(struct track *t, bool is_first)
     }
 }
 
-/* The excess temporal error of frame i against the reference (see struct
- * rb_analysis_flicker_frame), over the pixels where all four luminances are finite. */
-static double excess(const struct frame *cur, const struct frame *prev, const struct frame *ref,
-                     const struct frame *ref_prev)
+struct rb_analysis_flicker_excess rb_analysis_flicker_excess(const double *cur, const double *prev,
+                                                             const double *ref,
+                                                             const double *ref_prev,
+                                                             const float *ref_var,
+                                                             const float *ref_prev_var, size_t n)
 {
-    size_t n = (size_t)cur->width_px * cur->height_px, count = 0;
+    struct rb_analysis_flicker_excess x = {.error = NAN, .rms = NAN};
     double sum = 0.0;
     for (size_t i = 0; i < n; i++) {
-        double e = (cur->lum[i] - prev->lum[i]) - (ref->lum[i] - ref_prev->lum[i]);
-        if (isfinite(e)) {
-            sum += fabs(e);
-            count++;
-        }
+        double e = (cur[i] - prev[i]) - (ref[i] - ref_prev[i]);
+        if (!isfinite(e))
+            continue;
+        sum += fabs(e);
+        x.sum_sq += e * e;
+        if (ref_var)
+            x.sum_noise += (double)ref_var[i] + (double)ref_prev_var[i];
+        x.count++;
     }
-    return count ? sum / (double)count : NAN;
+    if (x.count) {
+        x.error = sum / (double)x.count;
+        x.rms = rb_analysis_flicker_excess_rms(x.sum_sq, x.sum_noise, x.count);
+    }
+    return x;
+}
+
+double rb_analysis_flicker_excess_rms(double sum_sq, double sum_noise, uint64_t count)
+{
+    return count ? sqrt(fmax(sum_sq - sum_noise, 0.0) / (double)count) : NAN;
 }
 
 /* The mean and largest of a frame value over the frames that have one (NaN for none). */
@@ -247,7 +280,8 @@ static enum rb_status first_pass(struct rb_analysis_flicker *f, struct track *tr
         struct frame swap = t->prev;
         t->prev = t->cur;
         t->cur = swap;
-        if ((st = read_frame(f, t->paths[i], true, &t->cur, err)))
+        if ((st = read_frame(f, t->paths[i], true, t->is_reference && f->is_noise_corrected,
+                             &t->cur, err)))
             return st;
         if (!f->width_px) {
             f->width_px = t->cur.width_px;
@@ -266,9 +300,17 @@ static enum rb_status first_pass(struct rb_analysis_flicker *f, struct track *tr
             warp(&t->cur, &t->prev, f->desc.depth_tolerance, stats(f, t, i));
         update_static(t, i == 0);
     }
-    if (track_count == 2 && has_prev)
-        f->frames[i].excess_error =
-            excess(&tracks[0].cur, &tracks[0].prev, &tracks[1].cur, &tracks[1].prev);
+    if (track_count == 2 && has_prev) {
+        const struct track *s = &tracks[0], *r = &tracks[1];
+        struct rb_analysis_flicker_excess x = rb_analysis_flicker_excess(
+            s->cur.lum, s->prev.lum, r->cur.lum, r->prev.lum, r->cur.variance, r->prev.variance,
+            (size_t)f->width_px * f->height_px);
+        f->frames[i].excess_error = x.error;
+        f->frames[i].excess_rms = x.rms;
+        f->frames[i].excess_sq_sum = x.sum_sq;
+        f->frames[i].excess_noise_sum = x.sum_noise;
+        f->frames[i].excess_count = x.count;
+    }
     return RB_OK;
 }
 
@@ -282,7 +324,7 @@ static enum rb_status second_pass(struct rb_analysis_flicker *f, struct track *t
         count += t->is_static[p] ? 1 : 0;
     t->summary->static_count = count;
     for (size_t i = 0; i < f->seq.frame_count && count; i++) {
-        enum rb_status st = read_frame(f, t->paths[i], false, &t->cur, err);
+        enum rb_status st = read_frame(f, t->paths[i], false, false, &t->cur, err);
         if (st)
             return st;
         double sum = 0.0;
@@ -329,15 +371,28 @@ static enum rb_status measure(struct rb_analysis_flicker *f, struct rb_err *err)
     };
     size_t track_count = f->has_reference ? 2 : 1;
     enum rb_status st = RB_OK;
-    if (f->has_reference && (st = reference_paths(f, &tracks[1].paths, err)))
+    if (f->has_reference && ((st = reference_paths(f, &tracks[1].paths, err)) ||
+                             (st = rb_analysis_layer_probe(tracks[1].paths[0], "variance",
+                                                           &f->is_noise_corrected, err))))
         goto out;
     for (size_t i = 0; i < f->seq.frame_count && st == RB_OK; i++)
         st = first_pass(f, tracks, track_count, i, err);
     for (size_t k = 0; k < track_count && st == RB_OK; k++)
         st = second_pass(f, &tracks[k], err);
-    if (st == RB_OK && f->has_reference)
+    if (st == RB_OK && f->has_reference) {
         mean_max(f, &f->frames[0].excess_error, sizeof(f->frames[0]), &f->excess_error,
                  &f->excess_error_max);
+        /* pooled before the root: a frame's noise estimate errs either way, and summing first
+         * lets those errors cancel where clamping each frame at 0 would not */
+        double sq = 0.0, noise = 0.0;
+        uint64_t count = 0;
+        for (size_t i = 0; i < f->seq.frame_count; i++) {
+            sq += f->frames[i].excess_sq_sum;
+            noise += f->frames[i].excess_noise_sum;
+            count += f->frames[i].excess_count;
+        }
+        f->excess_rms = rb_analysis_flicker_excess_rms(sq, noise, count);
+    }
 out:
     free(tracks[1].paths);
     for (size_t k = 0; k < 2; k++)
@@ -362,7 +417,7 @@ enum rb_status rb_analysis_flicker_create(const struct rb_analysis_flicker_desc 
     enum rb_status st;
     f->desc = rb_analysis_flicker_desc_resolve(desc);
     f->has_reference = desc->reference && *desc->reference;
-    f->excess_error = f->excess_error_max = NAN;
+    f->excess_error = f->excess_error_max = f->excess_rms = NAN;
     if ((st = rb_analysis_sequence_scan(desc->seq, &f->seq, err)) ||
         (f->has_reference && (st = rb_analysis_sequence_scan(desc->reference, &f->ref, err))))
         goto fail;
@@ -374,8 +429,11 @@ enum rb_status rb_analysis_flicker_create(const struct rb_analysis_flicker_desc 
     const struct rb_analysis_flicker_summary no_summary = {
         .warped_error = NAN, .warped_error_max = NAN, .static_variance = NAN};
     for (size_t i = 0; i < f->seq.frame_count; i++)
-        f->frames[i] = (struct rb_analysis_flicker_frame){
-            .frame = f->seq.frames[i], .seq = none, .ref = none, .excess_error = NAN};
+        f->frames[i] = (struct rb_analysis_flicker_frame){.frame = f->seq.frames[i],
+                                                          .seq = none,
+                                                          .ref = none,
+                                                          .excess_error = NAN,
+                                                          .excess_rms = NAN};
     f->summary = f->reference_summary = no_summary;
     if ((st = measure(f, err)))
         goto fail;

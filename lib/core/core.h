@@ -274,6 +274,9 @@ enum rb_layer {
      * reference's fixed count); after the others for the same reason. */
     RB_LAYER_SAMPLES, /* diffuse, specular */
     RB_LAYER_TILES,   /* diffuse, specular */
+    /* The reference's estimate of the variance of each pixel's mean, on luminance: how much its
+     * beauty would differ between two renders with other random numbers. Last, as above. */
+    RB_LAYER_VARIANCE, /* Y */
     RB_LAYER_COUNT,
 };
 #define RB_LAYERS_ALL ((1u << RB_LAYER_COUNT) - 1u)

@@ -4,7 +4,7 @@
 
 uint32_t rb_layer_width(enum rb_layer layer)
 {
-    static const uint32_t width[RB_LAYER_COUNT] = {3, 3, 3, 3, 1, 2, 3, 3, 2, 2};
+    static const uint32_t width[RB_LAYER_COUNT] = {3, 3, 3, 3, 1, 2, 3, 3, 2, 2, 1};
     return (uint32_t)layer < RB_LAYER_COUNT ? width[layer] : 0;
 }
 
@@ -25,16 +25,17 @@ uint32_t rb_layer_stride(uint32_t mask)
 const char *rb_layer_name(enum rb_layer layer)
 {
     static const char *const names[RB_LAYER_COUNT] = {
-        "direct",           "indirect",          "albedo",  "normal", "depth", "motion",
-        "indirect_diffuse", "indirect_specular", "samples", "tiles"};
+        "direct",           "indirect",          "albedo",  "normal", "depth",   "motion",
+        "indirect_diffuse", "indirect_specular", "samples", "tiles",  "variance"};
     return (uint32_t)layer < RB_LAYER_COUNT ? names[layer] : NULL;
 }
 
 const char *rb_layer_channel(enum rb_layer layer, uint32_t c)
 {
     static const char *const rgb[] = {"R", "G", "B"}, *const xyz[] = {"X", "Y", "Z"},
-                             *const z[] = {"Z"}, *const lobes[] = {"diffuse", "specular"};
-    static const char *const *const channels[RB_LAYER_COUNT] = {rgb, rgb, rgb, xyz,   z,
-                                                                xyz, rgb, rgb, lobes, lobes};
+                             *const z[] = {"Z"}, *const lobes[] = {"diffuse", "specular"},
+                             *const y[] = {"Y"};
+    static const char *const *const channels[RB_LAYER_COUNT] = {rgb, rgb, rgb,   xyz,   z, xyz,
+                                                                rgb, rgb, lobes, lobes, y};
     return c < rb_layer_width(layer) ? channels[layer][c] : NULL;
 }

@@ -109,8 +109,8 @@ static const struct key keys[] = {
     K("layers", KT_STRLIST, JOB(layers), NOLO, NOHI,
       "[direct, indirect, albedo, normal, depth, motion]", 0,
       "the EXR's layers beside the beauty (RGBA): direct, indirect, albedo, normal, depth, "
-      "motion, indirect_diffuse, indirect_specular, samples, tiles (hybrid and reference); only "
-      "these are read back from the device",
+      "motion, indirect_diffuse, indirect_specular, samples, tiles (hybrid and reference), "
+      "variance (reference); only these are read back from the device",
       .count_offset = JOB(layer_count)),
     K("frames.start", KT_INT, JOB(frame_start), 0, NOHI, "0", 0, "first frame to render"),
     K("frames.end", KT_INT, JOB(frame_end), -1, NOHI, "-1", 0,
@@ -1205,6 +1205,19 @@ static enum rb_status validate(struct ctx *c)
                         "layer '%s' is written by the hybrid and reference integrators only, "
                         "and this job renders with '%s'",
                         rb_layer_name((enum rb_layer)l), rb_integrator_name(kind));
+    /* variance is the spread of the reference's samples of a pixel; the GPU integrators keep
+     * no samples apart, and one sample has no spread. */
+    if (job->layer_mask & (1u << RB_LAYER_VARIANCE)) {
+        if (kind != RB_INTEGRATOR_REFERENCE)
+            return fail(c, later_mark(m, "layers", "integrator.name"), RB_E_INVALID,
+                        "layer 'variance' is written by the reference integrator only, and this "
+                        "job renders with '%s'",
+                        rb_integrator_name(kind));
+        if (job->integrator.reference.spp == 1)
+            return fail(c, later_mark(m, "layers", "integrator.reference.spp"), RB_E_INVALID,
+                        "layer 'variance' needs at least 2 samples a pixel, and "
+                        "'integrator.reference.spp' is 1");
+    }
     struct rb_err why = RB_ERR_INIT;
     if (rb_job_check_output(job->output, job->frame_start, job->frame_end, &why))
         return fail(c, mark_of(m, "output", NULL, &c->root), RB_E_INVALID, "%s", why.msg);

@@ -66,8 +66,10 @@
 #define MAX_THREADS 256
 #define MAX_PASS_SPP 16
 /* doubles per pixel: direct RGB, indirect RGB, samples that hit (box), then indirect by the
- * lobe of x1 that reflects it: diffuse RGB, specular RGB */
-#define ACCUM 13
+ * lobe of x1 that reflects it: diffuse RGB, specular RGB, then the sums of the luminance of
+ * the even and of the odd samples (the variance layer's replicates) */
+#define ACCUM 15
+#define ACCUM_LUM 13
 
 struct rb_reference {
     const struct rb_job *job;
@@ -77,6 +79,7 @@ struct rb_reference {
     uint32_t thread_count;
     bool is_hashed_sampler;
     bool use_box_filter; /* job: integrator.reference.pixel_filter box */
+    bool use_replicates; /* job: the variance layer (see mean_variance) */
     bool (*on_pass)(void *user, uint32_t spp_done, uint32_t spp_total);
     void *user;
 
@@ -281,6 +284,7 @@ enum rb_status rb_reference_create(const struct rb_reference_desc *desc, struct 
     ref->user = desc->user;
     ref->is_hashed_sampler = desc->sampler == RB_REFERENCE_SAMPLER_HASH;
     ref->use_box_filter = job->integrator.reference.pixel_filter == RB_PIXEL_FILTER_BOX;
+    ref->use_replicates = (job->layer_mask & (1u << RB_LAYER_VARIANCE)) != 0;
     uint32_t threads = desc->thread_count;
     if (threads == 0) {
         long n = sysconf(_SC_NPROCESSORS_ONLN);
@@ -660,7 +664,12 @@ static void trace_pixel(struct rb_reference *ref, const struct rb_mat4 *inv_vp, 
     }
     for (uint32_t s = s0; s < s1; s++) {
         struct rb_ref_rng rng;
-        rb_ref_rng_init(&rng, w->is_hashed_sampler, w->frame, (uint32_t)i, s);
+        if (ref->use_replicates) {
+            rb_ref_rng_init(&rng, w->is_hashed_sampler, w->frame, (uint32_t)i, s >> 1);
+            rb_ref_rng_replicate(&rng, s & 1u);
+        } else {
+            rb_ref_rng_init(&rng, w->is_hashed_sampler, w->frame, (uint32_t)i, s);
+        }
         struct rb_ref_sample_light light = {0};
         if (ref->use_box_filter) {
             float u[2], dir[3];
@@ -678,13 +687,34 @@ static void trace_pixel(struct rb_reference *ref, const struct rb_mat4 *inv_vp, 
             rb_ref_trace_sample(w, hit, ref->primary_dir + i * 3, &rng, &light, rays);
             acc[6] += 1.0;
         }
+        float beauty[3];
         for (int c = 0; c < 3; c++) {
             acc[c] += light.direct[c];
             acc[3 + c] += light.indirect[c];
             acc[7 + c] += light.indirect_lobe[RB_REF_LOBE_DIFFUSE][c];
             acc[10 + c] += light.indirect_lobe[RB_REF_LOBE_SPECULAR][c];
+            beauty[c] = light.direct[c] + light.indirect[c];
         }
+        acc[ACCUM_LUM + (s & 1u)] += rb_ref_luminance(beauty);
     }
+}
+
+/* The variance of a pixel's mean luminance (Rec.709, of the beauty) from its samples' sums:
+ * the even samples' and the odd samples' (acc_lum[0] and [1]), done samples in all. The Sobol
+ * sampler's samples are not independent (a pixel's net is stratified), so the spread of the
+ * samples around their mean overstates the spread of the mean where a pair of dimensions has a
+ * smooth integrand. So under the variance layer the even and the odd samples are two
+ * replicates, each its own scrambled net (rb_ref_rng_replicate), and their means m0 and m1 (of
+ * n0 and n1 samples) are independent: E[(m0 - m1)^2] = var m0 + var m1, and the mean of both,
+ * (n0 m0 + n1 m1) / done, has the variance (m0 - m1)^2 n0 n1 / done^2 in expectation (exactly
+ * for n0 = n1, taking var m ~ 1/n otherwise). One sample has no replicate to compare with: NaN. */
+static double mean_variance(const double acc_lum[2], uint32_t done)
+{
+    uint32_t n0 = done - done / 2, n1 = done / 2;
+    if (n1 == 0)
+        return NAN;
+    double d = acc_lum[0] / n0 - acc_lum[1] / n1;
+    return d * d * ((double)n0 * n1) / ((double)done * done);
 }
 
 /* ---- threads -------------------------------------------------------------------------------- */
@@ -907,6 +937,12 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct r
         /* Every path may take either lobe, so both count every sample; no tile ever stops
          * sampling (tiles stays 0). */
         o[RB_OUT_SAMPLES + 0] = o[RB_OUT_SAMPLES + 1] = (float)done;
+        /* The direct path space draws no random numbers under center: no variance (and only
+         * sample 0 was traced, its sums scaled). Without the layer, nothing to write. */
+        if (!ref->use_replicates || (!ref->use_box_filter && ref->world.paths == RB_PATHS_DIRECT))
+            o[RB_OUT_VARIANCE] = 0.0f;
+        else
+            o[RB_OUT_VARIANCE] = (float)mean_variance(acc + ACCUM_LUM, done);
     }
     /* Every float of the result, as the output pass counts them on the GPU. */
     uint32_t nonfinite = 0;

@@ -21,6 +21,10 @@ struct rb_ref_rng {
 
 void rb_ref_rng_init(struct rb_ref_rng *rng, bool is_hashed, uint32_t frame, uint32_t pixel,
                      uint32_t sample);
+/* Makes rng one of independent replicates (0 leaves it as it is): another replicate draws
+ * other scrambles and seeds, so the same sample index of two replicates gives independent
+ * numbers, and each replicate's samples 0, 1, ... are a net of their own. */
+void rb_ref_rng_replicate(struct rb_ref_rng *rng, uint32_t replicate);
 /* Dimension dim, in [0, 1); with the default sampler, rb_reference_random. Dimensions 2k and
  * 2k + 1 are one 2D point (stratified together over the samples): give a 2D integral such a
  * pair. rb_ref_rand2 draws both of the pair that starts at dim (even) at once. */

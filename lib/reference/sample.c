@@ -22,6 +22,12 @@ void rb_ref_rng_init(struct rb_ref_rng *rng, bool is_hashed, uint32_t frame, uin
     rng->seed = h;
 }
 
+void rb_ref_rng_replicate(struct rb_ref_rng *rng, uint32_t replicate)
+{
+    if (replicate)
+        rng->seed = rb_mix64(rng->seed ^ rb_mix64((uint64_t)replicate * GOLDEN));
+}
+
 float rb_ref_rand(const struct rb_ref_rng *rng, uint32_t dim)
 {
     if (rng->is_hashed) /* a SplitMix64 stream seeded by the key: the dim-th output */

@@ -95,6 +95,7 @@ struct rb_gpu_shadow_view {
 #define RB_LAYER_INDIRECT_SPECULAR 7u
 #define RB_LAYER_SAMPLES 8u
 #define RB_LAYER_TILES 9u
+#define RB_LAYER_VARIANCE 10u
 #endif
 
 /* A frame's result with every layer: these floats per pixel, in this order (the reference's
@@ -110,6 +111,7 @@ struct rb_gpu_shadow_view {
 #define RB_OUT_INDIRECT_SPECULAR 22 /* RGB */
 #define RB_OUT_SAMPLES 25           /* diffuse, specular */
 #define RB_OUT_TILES 27             /* diffuse, specular */
-#define RB_OUT_FLOATS 32            /* the last three are padding */
+#define RB_OUT_VARIANCE 29          /* Y: the reference's only */
+#define RB_OUT_FLOATS 32            /* the last two are padding */
 
 #endif

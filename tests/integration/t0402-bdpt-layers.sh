@@ -72,7 +72,7 @@ layers:
 EOF
 rb render "$T/bad.yaml" --out "$T/never" -q
 expect_exit 2 "a misspelt layer is refused"
-stderr_has "$T/bad.yaml:4:3: unknown layer 'indirect_difuse' (direct, indirect, albedo, normal, depth, motion, indirect_diffuse, indirect_specular, samples, tiles)" \
+stderr_has "$T/bad.yaml:4:3: unknown layer 'indirect_difuse' (direct, indirect, albedo, normal, depth, motion, indirect_diffuse, indirect_specular, samples, tiles, variance)" \
     "the error names the file, line and column, the layer, and the layers there are"
 check "nothing written" test ! -e "$T/never"
 done_testing

@@ -80,7 +80,7 @@ rb flicker "$T/seq/frame.####.exr" --reference "$T/ref/frame.####.exr" --csv
 expect_exit 0 "flicker --csv with patterns exits 0"
 cp "$T/stdout" "$T/flicker.csv"
 check "the CSV has its header" test "$(head -n 1 "$T/flicker.csv")" = \
-    "frame,warped_error,compared,disoccluded,offscreen,static_deviation,excess_error,reference_warped_error,reference_static_deviation"
+    "frame,warped_error,compared,disoccluded,offscreen,static_deviation,excess_error,reference_warped_error,reference_static_deviation,excess_rms"
 check "the CSV has a row a frame and the row 'all'" \
     test "$(cut -d, -f1 "$T/flicker.csv" | tr '\n' ' ')" = "frame 0 1 2 3 4 all "
 check "the CSV's mean excess is the JSON's" \

@@ -136,7 +136,7 @@ static void test_layers(void **state)
     static const uint32_t out[RB_LAYER_COUNT] = {
         RB_OUT_DIRECT,  RB_OUT_INDIRECT, RB_OUT_ALBEDO,           RB_OUT_NORMAL,
         RB_OUT_DEPTH,   RB_OUT_MOTION,   RB_OUT_INDIRECT_DIFFUSE, RB_OUT_INDIRECT_SPECULAR,
-        RB_OUT_SAMPLES, RB_OUT_TILES};
+        RB_OUT_SAMPLES, RB_OUT_TILES,    RB_OUT_VARIANCE};
     for (uint32_t l = 0; l < RB_LAYER_COUNT; l++)
         assert_int_equal(rb_layer_offset(RB_LAYERS_ALL, (enum rb_layer)l), out[l]);
     assert_int_equal(rb_layer_stride(RB_LAYERS_ALL), RB_OUT_FLOATS);
@@ -173,6 +173,14 @@ static void test_layers(void **state)
     assert_string_equal(rb_layer_channel(RB_LAYER_SAMPLES, 0), "diffuse");
     assert_string_equal(rb_layer_channel(RB_LAYER_TILES, 1), "specular");
     assert_null(rb_layer_channel(RB_LAYER_TILES, 2));
+    /* the reference's variance comes last: one channel, of luminance */
+    uint32_t variance = 1u << RB_LAYER_VARIANCE;
+    assert_int_equal(rb_layer_offset(variance | adaptive, RB_LAYER_VARIANCE), 8);
+    assert_int_equal(rb_layer_stride(variance | adaptive), 12);
+    assert_int_equal(rb_layer_offset(variance | depth, RB_LAYER_DEPTH), 4);
+    assert_string_equal(rb_layer_name(RB_LAYER_VARIANCE), "variance");
+    assert_string_equal(rb_layer_channel(RB_LAYER_VARIANCE, 0), "Y");
+    assert_null(rb_layer_channel(RB_LAYER_VARIANCE, 1));
     assert_null(rb_layer_channel(RB_LAYER_COUNT, 0));
 }
 

@@ -708,15 +708,31 @@ static void test_adaptive_layers(void **state)
     expect_error("scene: empty.gltf\nlayers: [tiles]\n", NULL, 0, RB_E_INVALID,
                  "job.yaml:2:9: layer 'tiles' is written by the hybrid and reference integrators "
                  "only, and this job renders with 'bdpt'");
+    /* variance: the reference's alone, and it needs two samples a pixel */
+    struct rb_job *vj = must_parse("scene: empty.gltf\nlayers: [variance]\n"
+                                   "integrator: {name: reference}\n",
+                                   NULL, 0);
+    assert_int_equal(vj->layer_mask, 1u << RB_LAYER_VARIANCE);
+    rb_job_destroy(vj);
+    expect_error("scene: empty.gltf\nintegrator: {name: hybrid}\nlayers: [variance]\n", NULL, 0,
+                 RB_E_INVALID,
+                 "job.yaml:3:9: layer 'variance' is written by the reference integrator only, and "
+                 "this job renders with 'hybrid'");
+    expect_error("scene: empty.gltf\nlayers: [variance]\n"
+                 "integrator: {name: reference, reference: {spp: 1}}\n",
+                 NULL, 0, RB_E_INVALID,
+                 "job.yaml:3:48: layer 'variance' needs at least 2 samples a pixel, and "
+                 "'integrator.reference.spp' is 1");
     struct rb_job_override o[] = {{"integrator.name", "bdpt", "--integrator 'bdpt'"}};
     expect_error("scene: empty.gltf\nlayers: [samples]\nintegrator: {name: hybrid}\n", o, 1,
                  RB_E_INVALID,
                  "--integrator 'bdpt': layer 'samples' is written by the hybrid and reference "
                  "integrators only, and this job renders with 'bdpt'");
-    expect_error("scene: empty.gltf\nlayers: [indirect_difuse]\n", NULL, 0, RB_E_INVALID,
-                 "job.yaml:2:9: unknown layer 'indirect_difuse' (direct, indirect, albedo, normal, "
-                 "depth, motion, indirect_diffuse, indirect_specular, samples, tiles); did you "
-                 "mean 'indirect_diffuse'?");
+    expect_error(
+        "scene: empty.gltf\nlayers: [indirect_difuse]\n", NULL, 0, RB_E_INVALID,
+        "job.yaml:2:9: unknown layer 'indirect_difuse' (direct, indirect, albedo, normal, "
+        "depth, motion, indirect_diffuse, indirect_specular, samples, tiles, variance); did "
+        "you mean 'indirect_diffuse'?");
 }
 
 static void test_man_page_covers_keys(void **state)

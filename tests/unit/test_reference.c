@@ -2415,6 +2415,71 @@ static void test_passes(void **state)
     rb_scene_destroy(s);
 }
 
+/* The variance layer: the same bits whatever the threads; 0 in the direct path space (no
+ * random numbers under center) and where the layer is not asked for; finite, >= 0 and mostly
+ * > 0 on a lit quad whose pixels are sampled over their area (box); smaller with 256 samples than
+ * with 16; and asking for it changes the samples (its two replicates draw other numbers than the
+ * one net without it). */
+static void test_variance_layer(void **state)
+{
+    (void)state;
+    struct rb_scene *s = scene_new();
+    add_quad(s, rb_v3(-1, -1, 0), rb_v3(2, 0, 0), rb_v3(0, 2, 0), add_material(s, lambert(0.5f)));
+    scene_finish(s);
+    const char *fmt = "resolution: [16, 12]\n"
+                      "frames: {start: 0, end: 0, rate: 24}\n"
+                      "camera: {fov_y_deg: 60, keys: [{t: 0, position: [0.1, 0.2, 1.5], "
+                      "look_at: [0, 0, 0]}]}\n"
+                      "lights: [{type: point, position: [0.5, 0.5, 2], intensity: 2}]\n"
+                      "environment: {color: [0.2, 0.3, 0.4], intensity: 1}\n"
+                      "layers: [%s]\n"
+                      "integrator: {name: reference, reference: {spp: %d, paths: %s}}\n";
+    /* box: every sample its own point of the pixel, so the light varies over them */
+    struct rb_job *jv = job_new(fmt, "variance", 256, "full, pixel_filter: box");
+    struct rb_job *jv16 = job_new(fmt, "variance", 16, "full, pixel_filter: box");
+    struct rb_job *jd = job_new(fmt, "variance", 16, "direct");
+    struct rb_job *jn = job_new(fmt, "depth", 256, "full, pixel_filter: box");
+    struct rb_reference *r1 = ref_new(jv, s, 1), *r3 = ref_new(jv, s, 3);
+    struct rb_reference *r16 = ref_new(jv16, s, 2), *rd = ref_new(jd, s, 2);
+    struct rb_reference *rn = ref_new(jn, s, 2);
+    struct rb_frame_result r;
+    float *a = render(r1, 0, &r), *b = render(r3, 0, &r), *c = render(r16, 0, &r);
+    float *d = render(rd, 0, &r), *plain = render(rn, 0, &r);
+    size_t n = (size_t)r.width_px * r.height_px;
+    assert_memory_equal(a, b, n * RB_OUT_FLOATS * sizeof(float));
+    double sum256 = 0.0, sum16 = 0.0;
+    uint32_t positive = 0;
+    bool is_same_beauty = true;
+    for (size_t i = 0; i < n; i++) {
+        float v = a[i * RB_OUT_FLOATS + RB_OUT_VARIANCE];
+        assert_true(isfinite(v) && v >= 0.0f);
+        positive += v > 0.0f;
+        sum256 += v;
+        sum16 += c[i * RB_OUT_FLOATS + RB_OUT_VARIANCE];
+        assert_true(d[i * RB_OUT_FLOATS + RB_OUT_VARIANCE] == 0.0f);
+        assert_true(plain[i * RB_OUT_FLOATS + RB_OUT_VARIANCE] == 0.0f);
+        is_same_beauty = is_same_beauty && a[i * RB_OUT_FLOATS] == plain[i * RB_OUT_FLOATS];
+    }
+    assert_true(positive > n / 4);
+    assert_true(sum256 < sum16);
+    assert_false(is_same_beauty); /* the replicates draw other numbers */
+    free(a);
+    free(b);
+    free(c);
+    free(d);
+    free(plain);
+    rb_reference_destroy(r1);
+    rb_reference_destroy(r3);
+    rb_reference_destroy(r16);
+    rb_reference_destroy(rd);
+    rb_reference_destroy(rn);
+    rb_job_destroy(jv);
+    rb_job_destroy(jv16);
+    rb_job_destroy(jd);
+    rb_job_destroy(jn);
+    rb_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -2433,6 +2498,7 @@ int main(void)
         cmocka_unit_test(test_skin),
         cmocka_unit_test(test_motion_and_morph),
         cmocka_unit_test(test_pixel_filter),
+        cmocka_unit_test(test_variance_layer),
         cmocka_unit_test(test_path_spaces),
         cmocka_unit_test(test_bdpt_emitter_as_point),
         cmocka_unit_test(test_bdpt_cornell_box),
