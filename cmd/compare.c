@@ -72,8 +72,10 @@ static void usage(FILE *f)
         "  --epsilon E          relMSE = (a-b)^2 / (b^2 + E), averaged (default 0.01)\n"
         "  --peak V             PSNR = 10 log10(V^2 / MSE) with V > 0 (default 1.0)\n"
         "  --error-image PATH   write |a-b| as R,G,B and relMSE as relmse.Y ('#' per frame)\n"
-        "  --flip-map PATH      write the per-pixel FLIP error as an EXR, flip.Y ('#' per\n"
-        "                       frame)\n"
+        "  --flip-map PATH      write the per-pixel FLIP error as an EXR (flip.Y) and a\n"
+        "                       PNG in FLIP's colour map, magma, beside it (.exr replaced\n"
+        "                       by .png); a PATH ending in .png writes the PNG alone\n"
+        "                       ('#' per frame)\n"
         "  --no-flip            do not compute FLIP\n"
         "  --max-relmse X       exit 1 when the relative MSE exceeds X\n"
         "  --max-rmse X         exit 1 when the RMSE exceeds X\n"
@@ -340,6 +342,31 @@ static bool is_png(const char *path)
     return n >= 4 && !strcasecmp(path + n - 4, ".png");
 }
 
+/* The FLIP map to path: a PNG through FLIP's colour map when path ends in .png; otherwise the
+ * values as an EXR (flip.Y) at path and the PNG beside it, path with its .exr (or nothing)
+ * replaced by .png. */
+static enum rb_status write_flip_map(const char *path, const float *map, uint32_t w, uint32_t h,
+                                     struct rb_err *err)
+{
+    static const char *const y[1] = {"Y"};
+    const struct rb_io_layer layers[1] = {
+        {.name = "flip", .channel_count = 1, .channel_names = y, .pixels = map}};
+    char png[4096];
+    size_t n = strlen(path);
+    enum rb_status st = rb_io_make_parent_dirs(path, err);
+    if (st || is_png(path))
+        return st ? st : rb_analysis_flip_png_write(path, map, w, h, err);
+    if (n >= 4 && !strcasecmp(path + n - 4, ".exr"))
+        n -= 4;
+    if (n + sizeof(".png") > sizeof(png))
+        return rb_errf(err, RB_E_INVALID, "--flip-map path '%.60s...' is too long", path);
+    memcpy(png, path, n);
+    memcpy(png + n, ".png", sizeof(".png"));
+    if ((st = rb_io_exr_write(path, w, h, layers, 1, NULL, 0, err)))
+        return st;
+    return rb_analysis_flip_png_write(png, map, w, h, err);
+}
+
 /* FLIP of a and b (RGB, w x h) into *out, pooled over the pixels mask keeps, and its map to
  * map_path when asked. */
 static enum rb_status compare_flip(const float *a, const float *b, uint32_t w, uint32_t h,
@@ -354,21 +381,25 @@ static enum rb_status compare_flip(const float *a, const float *b, uint32_t w, u
     struct flip_result r = {.has = true, .is_hdr = is_hdr};
     st = is_hdr ? rb_analysis_flip_hdr(a, b, w, h, NULL, map, NULL, &r.exposures, err)
                 : rb_analysis_flip_ldr(a, b, w, h, NULL, map, NULL, err);
-    if (!st && map_path) {
-        static const char *const y[1] = {"Y"};
-        const struct rb_io_layer layer = {
-            .name = "flip", .channel_count = 1, .channel_names = y, .pixels = map};
-        const struct rb_io_layer layers[1] = {layer};
-        if (!(st = rb_io_make_parent_dirs(map_path, err)))
-            st = rb_io_exr_write(map_path, w, h, layers, 1, NULL, 0, err);
-    }
+    if (!st && map_path)
+        st = write_flip_map(map_path, map, w, h, err);
     /* Pooled over the compared pixels: the map compacted to them (the pooled values do not
      * depend on where a pixel is; the largest error's pixel is taken from the map). */
+    uint32_t max_x = 0, max_y = 0;
+    float max = -1.0f;
     for (size_t i = 0; !st && i < n; i++)
-        if (mask[i])
+        if (mask[i]) {
+            if (map[i] > max) {
+                max = map[i];
+                max_x = (uint32_t)(i % w);
+                max_y = (uint32_t)(i / w);
+            }
             map[kept++] = map[i];
+        }
     if (!st && kept)
         st = rb_analysis_flip_pool(map, (uint32_t)kept, 1, &r.stats, err);
+    r.stats.max_x = max_x;
+    r.stats.max_y = max_y;
     free(map);
     if (!st && kept)
         *out = r;
@@ -526,9 +557,10 @@ static void json_flip(FILE *f, const struct flip_result *r, const char *sep)
     }
     fprintf(f,
             ",%s\"flip\": {\"kind\": \"%s\", \"mean\": %.9g, \"weighted_median\": %.9g, "
-            "\"q1\": %.9g, \"q3\": %.9g, \"max\": %.9g",
+            "\"q1\": %.9g, \"q3\": %.9g, \"max\": %.9g, \"max_pixel\": [%u, %u]",
             sep, r->is_hdr ? "hdr" : "ldr", r->stats.mean, r->stats.weighted_median,
-            r->stats.weighted_q1, r->stats.weighted_q3, r->stats.max);
+            r->stats.weighted_q1, r->stats.weighted_q3, r->stats.max, r->stats.max_x,
+            r->stats.max_y);
     if (r->is_hdr)
         fprintf(f, ", \"exposures\": {\"start\": %.9g, \"stop\": %.9g, \"count\": %u}",
                 r->exposures.start, r->exposures.stop, r->exposures.count);

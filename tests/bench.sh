@@ -4,7 +4,8 @@
 # the build against itself; the same frames as a Slurm array against one process; then the CPU
 # reference's speed, and its error on the Cornell box at 64 to 1024 spp; last, the bdpt
 # integrator's figures (tests/bench-bdpt.sh, which says what they are), its temporal caches'
-# (tests/bench-temporal.sh) and the hybrid integrator's (tests/bench-hybrid.sh).
+# (tests/bench-temporal.sh) and the hybrid integrator's (tests/bench-hybrid.sh); and the CPU time
+# of HDR-FLIP on a 1920x1080 pair, on one core (tests/bench-flip.sh).
 set -eu
 BUILD=${BUILD:-build}
 . tests/bench-lib.sh
@@ -103,3 +104,4 @@ fi
 BUILD=$BUILD sh tests/bench-bdpt.sh
 BUILD=$BUILD sh tests/bench-temporal.sh
 BUILD=$BUILD sh tests/bench-hybrid.sh
+BUILD=$BUILD sh tests/bench-flip.sh

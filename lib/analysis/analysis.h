@@ -512,9 +512,11 @@ struct rb_analysis_report_frame {
     double temporal_rmse; /* beauty RMSE against frame - 1 (NaN for a first frame, or a gap) */
     double reference_temporal_rmse; /* the same in the reference */
     double relmse;                  /* the beauty's relMSE against the reference's same frame */
-    double hit_ratio;               /* the mean of the hit-ratio image's first channel */
+    double flip;      /* the mean of the beauty's HDR-FLIP against it (rb_analysis_flip_hdr) */
+    double hit_ratio; /* the mean of the hit-ratio image's first channel */
     double warped_error, reference_warped_error, excess_error; /* rb_analysis_flicker's */
     char *thumb, *reference_thumb, *hits_thumb; /* data: URIs; NULL when there is none */
+    char *flip_thumb;     /* the FLIP map in FLIP's colour map (rb_analysis_flip_color), likewise */
     bool is_in_filmstrip; /* shown in the filmstrip (the thumbnails are made for these only) */
 };
 
@@ -540,16 +542,20 @@ struct rb_analysis_report {
     struct rb_analysis_report_frame *frames; /* seq.frame_count */
     bool has_reference, has_hits;
     char flicker_note[512]; /* why the flicker metrics are missing ("" when they are there) */
+    char flip_note[512];    /* why FLIP is missing from a frame with a reference (the first) */
 };
 
 /* Reads every frame of desc->dir (its EXR's beauty, its timing sidecar, its hit-ratio image
  * when the sequence has them) and of the reference, and computes the report's series and
- * thumbnails; the warped and excess temporal errors come from rb_analysis_flicker_create, and
- * where it cannot compute them (a sequence without motion or depth layers) its message goes in
- * flicker_note instead of failing the report. Every frame of the sequence needs a sidecar and, with
- * a reference, the same frame of the same size there; hit-ratio images are in every frame or in
- * none. Fails with the readers' statuses and a message naming the file, RB_E_INVALID for frames
- * that do not match, RB_E_NOMEM; *out only on success. */
+ * thumbnails (with a reference, each frame's relMSE and HDR-FLIP against it, as raybundle
+ * compare computes them, and its FLIP map; where HDR-FLIP cannot be computed, such as a
+ * reference too dark to choose exposures from, the frame's is NaN and flip_note says why); the
+ * warped and excess temporal errors come from rb_analysis_flicker_create, and where it cannot
+ * compute them (a sequence without motion or depth layers) its message goes in flicker_note instead
+ * of failing the report. Every frame of the sequence needs a sidecar and, with a reference, the
+ * same frame of the same size there; hit-ratio images are in every frame or in none. Fails with the
+ * readers' statuses and a message naming the file, RB_E_INVALID for frames that do not match,
+ * RB_E_NOMEM; *out only on success. */
 enum rb_status rb_analysis_report_create(const struct rb_analysis_report_desc *desc,
                                          struct rb_analysis_report **out, struct rb_err *err);
 void rb_analysis_report_destroy(struct rb_analysis_report *r);

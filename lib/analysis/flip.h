@@ -103,4 +103,20 @@ enum rb_status rb_analysis_flip_exposures_compute(const float *ref_rgb, uint32_t
 enum rb_status rb_analysis_flip_pool(const float *error_map, uint32_t width_px, uint32_t height_px,
                                      struct rb_analysis_flip_stats *out, struct rb_err *err);
 
+/* The colour map of FLIP's error images, as NVIDIA's tool draws them: magma (van der Walt and
+ * Smith's, for matplotlib), 256 sRGB colours from near black (0, 0, 4) at error 0 through purple
+ * and orange to light yellow (252, 253, 191) at 1. */
+#define RB_ANALYSIS_FLIP_COLORMAP_SIZE 256
+
+/* The sRGB colour (8 bits a channel) of an error: the map's entry nearest to error * 255,
+ * errors below 0 (and NaN) taking the first and above 1 the last. */
+void rb_analysis_flip_color(float error, uint8_t rgb[3]);
+
+/* Writes the error map (width_px x height_px values, rows top to bottom) through the colour map
+ * as an opaque 8-bit PNG to path, atomically (a temporary name, then renamed). Fails as
+ * rb_io_png_write does, and with RB_E_NOMEM. */
+enum rb_status rb_analysis_flip_png_write(const char *path, const float *error_map,
+                                          uint32_t width_px, uint32_t height_px,
+                                          struct rb_err *err);
+
 #endif

@@ -7,6 +7,7 @@
  * the sequence does not have (hit ratios; flicker without motion and depth layers) say so in
  * their place; nothing is made up. */
 #include "analysis/analysis.h"
+#include "analysis/flip.h"
 
 #include <assert.h>
 #include <dirent.h>
@@ -279,6 +280,7 @@ void rb_analysis_report_destroy(struct rb_analysis_report *r)
         free(f->thumb);
         free(f->reference_thumb);
         free(f->hits_thumb);
+        free(f->flip_thumb);
     }
     free(r->frames);
     free(r->pass_names);
@@ -322,10 +324,11 @@ static void thumb_size(uint32_t w, uint32_t h, uint32_t width_px, uint32_t *tw, 
     *th = t < 1.0 ? 1 : (uint32_t)t;
 }
 
-/* A thumbnail of RGB (values, 3 a pixel; or 1 a pixel as grey for data) made opaque. */
+/* A thumbnail of the first 3 of each stride values (the first alone as grey when is_grey) made
+ * opaque: through the view transform, or as they are for data. */
 static enum rb_status thumbnail(const struct rb_analysis_report_desc *desc, uint32_t w, uint32_t h,
-                                const float *values, size_t stride, bool is_data, char **out,
-                                struct rb_err *err)
+                                const float *values, size_t stride, bool is_grey, bool is_data,
+                                char **out, struct rb_err *err)
 {
     size_t n = (size_t)w * h;
     float *rgba = malloc(n * 4 * sizeof(*rgba));
@@ -333,7 +336,7 @@ static enum rb_status thumbnail(const struct rb_analysis_report_desc *desc, uint
         return rb_errf(err, RB_E_NOMEM, "thumbnail: out of memory for %ux%u", w, h);
     for (size_t i = 0; i < n; i++) {
         for (int c = 0; c < 3; c++)
-            rgba[i * 4 + c] = values[i * stride + (is_data ? 0 : (size_t)c)];
+            rgba[i * 4 + c] = values[i * stride + (is_grey ? 0 : (size_t)c)];
         rgba[i * 4 + 3] = 1.0f;
     }
     struct rb_io_thumbnail_desc td = {.color = desc->color, .is_data = is_data};
@@ -341,6 +344,54 @@ static enum rb_status thumbnail(const struct rb_analysis_report_desc *desc, uint
                &td.width_px, &td.height_px);
     enum rb_status st = rb_io_thumbnail_data_uri(w, h, rgba, &td, out, err);
     free(rgba);
+    return st;
+}
+
+/* HDR-FLIP of the sequence's frame i (cur) against its reference (ref): its mean, and the
+ * thumbnail of its map through FLIP's colour map for the filmstrip. A pair it cannot be
+ * computed for gets NaN and, the first time, its reason in flip_note; only running out of
+ * memory fails. */
+static enum rb_status flip_frame(const struct rb_analysis_report_desc *desc,
+                                 struct rb_analysis_report *r, size_t i, const struct beauty *cur,
+                                 const struct beauty *ref, struct rb_err *err)
+{
+    struct rb_analysis_report_frame *f = &r->frames[i];
+    uint32_t w = cur->width_px, h = cur->height_px;
+    size_t n = (size_t)w * h;
+    struct rb_analysis_flip_stats stats;
+    struct rb_err why = RB_ERR_INIT;
+    float *map = malloc(n * sizeof(*map)), *rgb = NULL;
+    enum rb_status st = RB_OK;
+    if (!map) {
+        st = rb_errf(err, RB_E_NOMEM, "FLIP: out of memory for %ux%u", w, h);
+        goto out;
+    }
+    if (rb_analysis_flip_hdr(cur->rgb, ref->rgb, w, h, NULL, map, &stats, NULL, &why)) {
+        if (why.status == RB_E_NOMEM)
+            st = rb_errf(err, why.status, "%s", why.msg);
+        else if (!*r->flip_note)
+            snprintf(r->flip_note, sizeof(r->flip_note), "frame %d: %.480s", f->frame, why.msg);
+        goto out;
+    }
+    f->flip = stats.mean;
+    if (!f->is_in_filmstrip)
+        goto out;
+    /* The map's colours as they are (data: no view transform); 8 bits divided by 255 come back
+     * as the same 8 bits. */
+    if (!(rgb = malloc(n * 3 * sizeof(*rgb)))) {
+        st = rb_errf(err, RB_E_NOMEM, "FLIP: out of memory for %ux%u", w, h);
+        goto out;
+    }
+    for (size_t p = 0; p < n; p++) {
+        uint8_t c[3];
+        rb_analysis_flip_color(map[p], c);
+        for (int k = 0; k < 3; k++)
+            rgb[3 * p + (size_t)k] = (float)c[k] / 255.0f;
+    }
+    st = thumbnail(desc, w, h, rgb, 3, false, true, &f->flip_thumb, err);
+out:
+    free(rgb);
+    free(map);
     return st;
 }
 
@@ -433,7 +484,7 @@ static enum rb_status read_hits(const struct rb_analysis_report_desc *desc,
     }
     f->hit_ratio = finite ? sum / (double)finite : NAN;
     if (f->is_in_filmstrip)
-        st = thumbnail(desc, img.width_px, img.height_px, img.pixels, img.channel_count, true,
+        st = thumbnail(desc, img.width_px, img.height_px, img.pixels, img.channel_count, true, true,
                        &f->hits_thumb, err);
     if (st)
         rb_err_prefix(err, "'%s'", path);
@@ -481,9 +532,11 @@ static enum rb_status read_reference(const struct rb_analysis_report_desc *desc,
         rb_io_image_attr(path, "raybundle:spp", r->reference_spp, sizeof(r->reference_spp));
     }
     if (!f->is_in_filmstrip)
-        return RB_OK;
-    return thumbnail(desc, ref->width_px, ref->height_px, ref->rgb, 3, false, &f->reference_thumb,
-                     err);
+        return flip_frame(desc, r, i, cur, ref, err);
+    if ((st = thumbnail(desc, ref->width_px, ref->height_px, ref->rgb, 3, false, false,
+                        &f->reference_thumb, err)))
+        return st;
+    return flip_frame(desc, r, i, cur, ref, err);
 }
 
 static enum rb_status read_frames(const struct rb_analysis_report_desc *desc,
@@ -512,7 +565,7 @@ static enum rb_status read_frames(const struct rb_analysis_report_desc *desc,
             f->temporal_rmse = m.rmse;
         }
         if (f->is_in_filmstrip && (st = thumbnail(desc, cur.width_px, cur.height_px, cur.rgb, 3,
-                                                  false, &f->thumb, err))) {
+                                                  false, false, &f->thumb, err))) {
             rb_err_prefix(err, "'%s'", path);
             break;
         }
@@ -607,6 +660,7 @@ enum rb_status rb_analysis_report_create(const struct rb_analysis_report_desc *d
             .temporal_rmse = NAN,
             .reference_temporal_rmse = NAN,
             .relmse = NAN,
+            .flip = NAN,
             .hit_ratio = NAN,
             .warped_error = NAN,
             .reference_warped_error = NAN,
@@ -885,7 +939,7 @@ static double mean(const struct rb_analysis_report *r, size_t offset)
 static void header(FILE *f, const struct rb_analysis_report *r)
 {
     const struct rb_analysis_sequence *s = &r->seq;
-    char a[32], b[32], c[32];
+    char a[32], b[32], c[32], d[32];
     fputs("<header>\n<h1>raybundle report</h1>\n<table>\n<tr><th>sequence</th><td>", f);
     pattern(f, s);
     fprintf(f, ": %zu frame%s, %d to %d%s, %ux%u", s->frame_count, s->frame_count == 1 ? "" : "s",
@@ -917,11 +971,12 @@ static void header(FILE *f, const struct rb_analysis_report *r)
         fputs("none (--reference REFSEQ)", f);
     }
     fprintf(f,
-            "</td></tr>\n<tr><th>means</th><td>frame wall time %s ms, passes %s ms, relMSE %s"
-            "</td></tr>\n</table>\n</header>\n",
+            "</td></tr>\n<tr><th>means</th><td>frame wall time %s ms, passes %s ms, relMSE %s, "
+            "FLIP %s</td></tr>\n</table>\n</header>\n",
             num(a, sizeof(a), mean(r, offsetof(struct rb_analysis_report_frame, wall_ms))),
             num(b, sizeof(b), mean(r, offsetof(struct rb_analysis_report_frame, pass_total_ms))),
-            num(c, sizeof(c), mean(r, offsetof(struct rb_analysis_report_frame, relmse))));
+            num(c, sizeof(c), mean(r, offsetof(struct rb_analysis_report_frame, relmse))),
+            num(d, sizeof(d), mean(r, offsetof(struct rb_analysis_report_frame, flip))));
 }
 
 static void image(FILE *f, const char *uri, uint32_t width_px, int frame, const char *what)
@@ -935,8 +990,10 @@ static void filmstrip(FILE *f, const struct rb_analysis_report *r, int chart)
     char buf[32];
     fprintf(f,
             "<section id=\"filmstrip\" style=\"top:%gpx\">\n<h2>Frames, display-referred "
-            "through the OpenColorIO view%s</h2>\n",
-            section_top(chart), r->has_hits ? ", and their hit ratios (black 0, white 1)" : "");
+            "through the OpenColorIO view%s%s</h2>\n",
+            section_top(chart),
+            r->has_reference ? ", their FLIP maps (magma: black 0, light yellow 1)" : "",
+            r->has_hits ? ", and their hit ratios (black 0, white 1)" : "");
     if (r->filmstrip_count < r->seq.frame_count)
         fprintf(f,
                 "<p class=\"stride\">%zu of the %zu frames, evenly spaced, the first and the "
@@ -945,18 +1002,26 @@ static void filmstrip(FILE *f, const struct rb_analysis_report *r, int chart)
     if (!r->has_hits)
         fputs("<p>No hit-ratio images (NAME.####.hits.exr) in this sequence.</p>\n", f);
     fprintf(f, "<table>\n<tr><th>frame</th><th>sequence</th>%s%s</tr>\n",
-            r->has_reference ? "<th>reference</th>" : "", r->has_hits ? "<th>hit ratio</th>" : "");
+            r->has_reference ? "<th>reference</th><th>FLIP</th>" : "",
+            r->has_hits ? "<th>hit ratio</th>" : "");
     for (size_t i = 0; i < r->seq.frame_count; i++) {
         const struct rb_analysis_report_frame *fr = &r->frames[i];
         if (!fr->is_in_filmstrip)
             continue;
         fprintf(f, "<tr><td>%d", fr->frame);
-        if (r->has_reference)
+        if (r->has_reference) {
             fprintf(f, "<br>relMSE %s", num(buf, sizeof(buf), fr->relmse));
+            fprintf(f, "<br>FLIP %s", num(buf, sizeof(buf), fr->flip));
+        }
         fputs("</td>", f);
         image(f, fr->thumb, r->thumb_width_px, fr->frame, "sequence");
-        if (r->has_reference)
+        if (r->has_reference) {
             image(f, fr->reference_thumb, r->thumb_width_px, fr->frame, "reference");
+            if (fr->flip_thumb)
+                image(f, fr->flip_thumb, r->thumb_width_px, fr->frame, "FLIP");
+            else
+                fputs("<td>-</td>", f);
+        }
         if (r->has_hits)
             image(f, fr->hits_thumb, r->thumb_width_px, fr->frame, "hit ratio");
         fputs("</tr>\n", f);
@@ -1022,6 +1087,17 @@ static void page(FILE *f, const struct rb_analysis_report *r)
     else
         chart_none(f, chart++, "reference-error", "Error against the reference",
                    "No reference given: raybundle report --reference REFSEQ adds this plot.");
+    const struct series flip[] = {{"FLIP", "#b07aa1", FIELD(flip)}};
+    snprintf(note, sizeof(note), "Not computed for every frame: %s.", r->flip_note);
+    if (!r->has_reference)
+        chart_none(f, chart++, "reference-flip", "FLIP against the reference",
+                   "No reference given: raybundle report --reference REFSEQ adds this plot.");
+    else
+        lines(f, r, chart++, "reference-flip",
+              *r->flip_note ? note
+                            : "FLIP against the reference (the mean of HDR-FLIP's per-pixel "
+                              "error, 0 to 1: what a viewer sees)",
+              flip, 1, "", 0.0);
     filmstrip(f, r, chart);
     fputs("</body>\n</html>\n", f);
 }

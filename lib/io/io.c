@@ -1124,6 +1124,26 @@ enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t
     return st;
 }
 
+enum rb_status rb_io_png_write(const char *path, uint32_t width_px, uint32_t height_px,
+                               const uint8_t *rgba, struct rb_err *err)
+{
+    if (!path || !*path)
+        return rb_errf(err, RB_E_INVALID, "PNG: empty path");
+    if (!width_px || !height_px || !rgba)
+        return rb_errf(err, RB_E_INVALID, "cannot write '%s': empty image", path);
+    void *png = NULL;
+    size_t png_size = 0;
+    char msg[300];
+    enum rb_status st;
+    if (!rb_png_encode(rgba, width_px, height_px, "raybundle " RB_VERSION, &png, &png_size, msg,
+                       sizeof(msg)))
+        st = rb_errf(err, RB_E_EXTERNAL, "cannot write '%s': %s", path, msg);
+    else
+        st = rb_io_write_atomic(path, png, png_size, err);
+    free(png);
+    return st;
+}
+
 enum rb_status rb_io_thumbnail_data_uri(uint32_t width_px, uint32_t height_px, const float *rgba,
                                         const struct rb_io_thumbnail_desc *desc, char **out,
                                         struct rb_err *err)

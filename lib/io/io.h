@@ -169,6 +169,12 @@ enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t
                                    const float *rgba, const struct rb_io_color_desc *desc,
                                    struct rb_err *err);
 
+/* Writes width*height 8-bit RGBA pixels (rows top to bottom, unassociated alpha), display values
+ * taken as they are (no view transform), as a PNG to path, atomically. RB_E_INVALID for an empty
+ * image, RB_E_EXTERNAL when libpng fails, rb_io_write_atomic's statuses; each names path. */
+enum rb_status rb_io_png_write(const char *path, uint32_t width_px, uint32_t height_px,
+                               const uint8_t *rgba, struct rb_err *err);
+
 /* A thumbnail for an HTML page: a PNG inline, as a data: URI. */
 struct rb_io_thumbnail_desc {
     uint32_t width_px, height_px;         /* the thumbnail's size, at most the image's; 0: its */

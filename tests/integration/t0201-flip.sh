@@ -2,9 +2,10 @@
 # raybundle compare's FLIP: on the image pairs NVIDIA's reference tool (FLIP 1.6) was run on
 # (../shared/flip, beside the scenes; skipped without them), the mean that compare prints is the
 # tool's within 1%, HDR-FLIP for EXRs and LDR-FLIP for PNGs; --max-flip fails above its bound,
-# --flip-map writes the per-pixel error, --no-flip leaves it out, and layers that are not RGB
-# have none.
+# --flip-map writes the per-pixel error (an EXR, and a PNG in FLIP's colour map, magma),
+# --no-flip leaves it out, and layers that are not RGB have none.
 . tests/integration/lib.sh
+PIXELS="$BUILD/tests/tools/pixels"
 
 FLIP=${RB_FLIP:-$(dirname "$SCENES")/flip}
 
@@ -43,6 +44,8 @@ if [ -f "$FLIP/expected.tsv" ]; then
     rb info "$T/map/flip.exr"
     check "--flip-map writes a 320x180 map" grep -qx 'size: 320x180' "$T/stdout"
     check "with one channel, flip.Y" grep -qx 'layers: flip (Y)' "$T/stdout"
+    rb info "$T/map/flip.png"
+    check "and its PNG beside it, 320x180" grep -qx 'size: 320x180' "$T/stdout"
     rb compare "$a" "$b" --no-flip
     check "--no-flip prints no flip line" sh -c "! grep -q '^flip' '$T/stdout'"
 else
@@ -57,6 +60,35 @@ check "a frame against itself: FLIP 0" test "$(json_flip_mean)" = 0
 rb compare "$T/r/frame.####.exr" "$T/r/frame.####.exr" --frames 1-2
 check "a sequence prints the mean of its frames' FLIP" grep -q '^flip  *0 (mean of the frames' \
     "$T/stdout"
+
+# The map as a PNG in magma: FLIP 0 is its first colour (0, 0, 4), the largest error a bright
+# one. A green box on frame 1 leaves the pixels farther from it than the filters reach at 0.
+oiiotool "$T/r/frame.0001.exr" --ch R,G,B --box:color=0,4,0:fill=1 40,12,47,19 -d float \
+    -o "$T/box.exr" >/dev/null 2>&1
+rb compare "$T/box.exr" "$T/r/frame.0001.exr" --flip-map "$T/fm/box.exr" --json
+expect_exit 0 "--flip-map of a frame with a box on it exits 0"
+check "it writes the EXR and the PNG, and no temporary file" \
+    test "$(ls "$T/fm" | tr '\n' ' ')" = "box.exr box.png "
+rb info "$T/fm/box.png"
+check "the PNG is the image's size, 64x36" grep -qx 'size: 64x36' "$T/stdout"
+check "a pixel far from the box (FLIP 0) is magma's first colour" \
+    test "$("$PIXELS" "$T/fm/box.png" 2 2)" = 000004
+rb compare "$T/box.exr" "$T/r/frame.0001.exr" --json
+at=$(python3 -c 'import json, sys; print(*json.load(open(sys.argv[1]))["flip"]["max_pixel"])' \
+    "$T/stdout")
+max=$("$PIXELS" "$T/fm/box.png" $at)
+check "the largest error's pixel ($at) is bright ($max)" \
+    sh -c "printf '%d %d\n' 0x${max%????} 0x$(echo "$max" | cut -c3-4) | awk '{ exit !(\$1 > 224 && \$2 > 192) }'"
+rb compare "$T/r/frame.0001.exr" "$T/r/frame.0001.exr" --flip-map "$T/fm/self.png"
+expect_exit 0 "--flip-map PATH.png of a frame against itself exits 0"
+check "it writes the PNG alone" test ! -e "$T/fm/self.exr" -a ! -e "$T/fm/self.png.exr"
+check "every pixel of it is magma's first colour" \
+    test "$("$PIXELS" "$T/fm/self.png" 0 0 64 36 000004)" = 2304
+rb compare "$T/r/frame.####.exr" "$T/r/frame.####.exr" --frames 1-2 --flip-map "$T/fm/s.##.exr"
+expect_exit 0 "--flip-map with '#' for a sequence exits 0"
+check "it writes each frame's EXR and PNG" \
+    test "$(ls "$T/fm" | grep '^s\.' | tr '\n' ' ')" = "s.01.exr s.01.png s.02.exr s.02.png "
+
 rb compare "$T/r/frame.0001.exr" "$T/r/frame.0002.exr" --layer depth --json
 check "the depth layer has no FLIP" grep -q '"flip": null' "$T/stdout"
 rb compare "$T/r/frame.0001.exr" "$T/r/frame.0002.exr" --layer normal --json

@@ -3,7 +3,8 @@
 # itself (no script, nothing fetched, every image a data: URI) and agrees with raybundle compare;
 # usage errors and sequences that do not match are named; hit-ratio images, where a sequence has
 # them, are plotted and shown: synthetic ones, and a real bdpt sequence's, whose plotted means are
-# its sidecars' hits.mean; --filmstrip N shows N frames evenly spaced. Then, where Debian's chromium runs, the page is loaded headless:
+# its sidecars' hits.mean; each frame's FLIP against the reference is raybundle compare's, and
+# its FLIP map in the filmstrip is compare's --flip-map PNG; --filmstrip N shows N frames evenly spaced. Then, where Debian's chromium runs, the page is loaded headless:
 # a copy with a probe script in its <head> records every error event, console.error and image
 # that did not decode into the DOM that --dump-dom prints (Chromium's own log lines change from
 # release to release; the DOM does not), and a screenshot is checked pixel by pixel: the plots
@@ -51,9 +52,11 @@ check "the page links nothing" test "$(grep -Eci '<link|@import|url\(' "$page")"
 check "the page fetches nothing" test "$(grep -Eci '(src|href)="?(https?:|//|file:)' "$page")" -eq 0
 check "every src is an inline PNG" \
     test "$(grep -o 'src="[^"]*' "$page" | grep -vc '^src="data:image/png;base64,')" -eq 0
-check "8 thumbnails: the sequence's and the reference's" \
-    test "$(grep -o '<img src="data:image/png;base64,' "$page" | wc -l)" -eq 8
-for id in passes frame-time temporal warped reference-error; do
+check "12 thumbnails: the sequence's, the reference's and the FLIP maps" \
+    test "$(grep -o '<img src="data:image/png;base64,' "$page" | wc -l)" -eq 12
+check "a FLIP map a frame in the filmstrip" \
+    test "$(grep -o 'alt="FLIP of frame [0-3]"' "$page" | tr -dc '0-9')" = 0123
+for id in passes frame-time temporal warped reference-error reference-flip; do
     check "the page plots '$id'" grep -q "<section id=\"$id\".*" "$page"
 done
 check "the page says there are no hit ratios" grep -q 'No hit-ratio images' "$page"
@@ -72,7 +75,15 @@ expect_exit 0 "compare the same sequences"
 for f in 0 1 2 3; do
     want=$(sed -n "s/.*{\"frame\": $f, .*\"relmse\": \([^,]*\),.*/\1/p" "$T/stdout")
     want=$(printf '%.4g' "$want")
-    check "frame $f's relMSE is compare's ($want)" grep -q "^<tr><td>$f<br>relMSE $want</td>" "$page"
+    check "frame $f's relMSE is compare's ($want)" grep -q "^<tr><td>$f<br>relMSE $want<br>" "$page"
+done
+# So is its FLIP (HDR-FLIP, the frames being EXRs), under the thumbnail and in the chart.
+for f in 0 1 2 3; do
+    want=$(sed -n "s/.*{\"frame\": $f, .*\"flip\": {\"kind\": \"hdr\", \"mean\": \([^,]*\),.*/\1/p" \
+        "$T/stdout")
+    want=$(printf '%.4g' "$want")
+    check "frame $f's FLIP is compare's ($want)" grep -q "^<tr><td>$f<br>.*<br>FLIP $want</td>" "$page"
+    check "frame $f's FLIP is plotted ($want)" grep -q "<title>frame $f: FLIP $want</title>" "$page"
 done
 for f in 1 2 3; do
     check "the sidecar's passes of frame $f are in its bar's tooltip" \
@@ -86,8 +97,16 @@ thumb() {
 thumb "$page" "sequence of frame 2"
 check "a full-size thumbnail has the pixels of render --preview's PNG" \
     sh -c "oiiotool --diff '$T/thumb.png' '$T/seq/frame.0002.png' >/dev/null"
+rb compare "$T/seq/frame.0002.exr" "$T/ref/frame.0002.exr" --flip-map "$T/flip2.png"
+expect_exit 0 "compare --flip-map of frame 2"
+thumb "$page" "FLIP of frame 2"
+check "frame 2's full-size FLIP map has the pixels of compare's --flip-map PNG" \
+    sh -c "oiiotool --diff '$T/thumb.png' '$T/flip2.png' >/dev/null"
 rb report "$T/seq" -o "$T/small.html" --thumb-width 32
 expect_exit 0 "report --thumb-width 32 exits 0"
+check "without a reference, no FLIP map" sh -c "! grep -q 'alt=\"FLIP of' '$T/small.html'"
+check "and the FLIP chart says how to get one" \
+    grep -q '<section id="reference-flip".*' "$T/small.html"
 thumb "$T/small.html" "sequence of frame 1"
 check "its thumbnails are 32x18" sh -c "oiiotool --info '$T/thumb.png' | grep -q ' 32 x   18,'"
 rb report "$T/seq" -o "$T/small.html" --thumb-width 0
@@ -260,7 +279,7 @@ else
         "stderr: $(grep -v dbus "$T/browser.err" | tail -n 5)"
 fi
 
-browser --window-size=960,1700 --screenshot="$T/shot.png" "file://$page"
+browser --window-size=960,1950 --screenshot="$T/shot.png" "file://$page"
 check "Chromium takes a screenshot of the page" test -s "$T/shot.png"
 
 # section ID: the page's lines of that chart's section.
@@ -290,7 +309,7 @@ drawn() {
     done
 }
 drawn "$T/shot.png" "passes shadow" "frame-time frame wall" "temporal sequence" "warped excess" \
-    "reference-error relMSE"
+    "reference-error relMSE" "reference-flip FLIP"
 
 # Each frame's largest pass, from its sidecar: the middle of its segment of the stack, mapped
 # through the plot area and axis the page declares, is that pass's colour on the screenshot; the
@@ -328,7 +347,7 @@ done
 # pixels above or below it (the line between points is nearly flat there, a slot being 107
 # pixels wide).
 page=$bpage
-browser --window-size=960,1700 --screenshot="$T/bshot.png" "file://$page"
+browser --window-size=960,1950 --screenshot="$T/bshot.png" "file://$page"
 check "Chromium takes a screenshot of the bdpt page" test -s "$T/bshot.png"
 hc=$(color hit-ratio "hit ratio")
 check "the hit-ratio chart's legend names its colour ($hc)" test -n "$hc"
@@ -336,7 +355,7 @@ set -- $(plot hit-ratio)
 px=$1 py=$2 pw=$3 ph=$4 pmax=$5 pn=$6
 check "the hit-ratio chart runs from 0 to 1 with a slot a frame" test "$pmax $pn" = "1 6"
 drawn "$T/bshot.png" "hit-ratio hit ratio" "warped excess" "warped sequence" \
-    "reference-error relMSE"
+    "reference-error relMSE" "reference-flip FLIP"
 for f in 0 1 2 3 4 5; do
     set -- $(awk -v px="$px" -v py="$py" -v pw="$pw" -v ph="$ph" -v max="$pmax" -v n="$pn" \
         -v i="$f" -v v="$(hits_mean $f)" 'BEGIN {

@@ -394,6 +394,71 @@ static void test_defaults(void **state)
     assert_false(d.has_start_exposure || d.has_stop_exposure);
 }
 
+/* The colour map: magma's ends, its nearest entry, and what lies outside [0, 1]. */
+static void test_color(void **state)
+{
+    (void)state;
+    uint8_t c[3];
+    rb_analysis_flip_color(0.0f, c);
+    assert_true(c[0] == 0 && c[1] == 0 && c[2] == 4);
+    rb_analysis_flip_color(1.0f, c);
+    assert_true(c[0] == 252 && c[1] == 253 && c[2] == 191);
+    rb_analysis_flip_color(0.5f, c); /* entry 128 */
+    assert_true(c[0] == 183 && c[1] == 55 && c[2] == 121);
+    rb_analysis_flip_color(-1.0f, c);
+    assert_true(c[0] == 0 && c[1] == 0 && c[2] == 4);
+    rb_analysis_flip_color(NAN, c);
+    assert_true(c[0] == 0 && c[1] == 0 && c[2] == 4);
+    rb_analysis_flip_color(2.0f, c);
+    assert_true(c[0] == 252 && c[1] == 253 && c[2] == 191);
+    /* Brighter (in luma) as the error grows, step by step of an eighth. */
+    int prev = -1;
+    for (int i = 0; i <= 8; i++) {
+        rb_analysis_flip_color((float)i / 8.0f, c);
+        int luma = 2126 * c[0] + 7152 * c[1] + 722 * c[2];
+        assert_true(luma > prev);
+        prev = luma;
+    }
+}
+
+/* Images wider than one strip and not a multiple of the filters' blocks wide: the map of the
+ * mirrored images is the map mirrored, FLIP's filters being symmetric (to rounding, the sums
+ * running in another order), so no strip or block edge shows. */
+static void test_mirror(void **state)
+{
+    (void)state;
+    enum { MW = 301, MH = 23 };
+    float *a = malloc(MW * MH * 3 * sizeof(float)), *b = malloc(MW * MH * 3 * sizeof(float));
+    float *ma = malloc(MW * MH * 3 * sizeof(float)), *mb = malloc(MW * MH * 3 * sizeof(float));
+    float *map = malloc(MW * MH * sizeof(float)), *mmap = malloc(MW * MH * sizeof(float));
+    assert_non_null(a && b && ma && mb && map && mmap);
+    for (int y = 0; y < MH; y++)
+        for (int x = 0; x < MW; x++)
+            for (int c = 0; c < 3; c++) {
+                size_t i = ((size_t)y * MW + (size_t)x) * 3 + (size_t)c;
+                size_t m = ((size_t)y * MW + (size_t)(MW - 1 - x)) * 3 + (size_t)c;
+                a[i] = ma[m] = 0.5f + 0.4f * sinf(0.05f * (float)(x * (c + 1) + 3 * y));
+                b[i] = mb[m] = 0.5f + 0.4f * sinf(0.05f * (float)(x * (c + 1) + 3 * y) + 0.3f);
+            }
+    struct rb_err err = RB_ERR_INIT;
+    assert_int_equal(rb_analysis_flip_hdr(a, b, MW, MH, NULL, map, NULL, NULL, &err), RB_OK);
+    assert_int_equal(rb_analysis_flip_hdr(ma, mb, MW, MH, NULL, mmap, NULL, NULL, &err), RB_OK);
+    double sum = 0.0;
+    for (int y = 0; y < MH; y++)
+        for (int x = 0; x < MW; x++) {
+            float v = map[(size_t)y * MW + (size_t)x];
+            assert_float_equal(v, mmap[(size_t)y * MW + (size_t)(MW - 1 - x)], 1e-5f);
+            sum += v;
+        }
+    assert_true(sum > 0.0);
+    free(a);
+    free(b);
+    free(ma);
+    free(mb);
+    free(map);
+    free(mmap);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -401,7 +466,8 @@ int main(void)
         cmocka_unit_test(test_one_pixel),    cmocka_unit_test(test_symmetric),
         cmocka_unit_test(test_pool),         cmocka_unit_test(test_exposures),
         cmocka_unit_test(test_invalid),      cmocka_unit_test(test_expected_ldr),
-        cmocka_unit_test(test_expected_hdr),
+        cmocka_unit_test(test_expected_hdr), cmocka_unit_test(test_color),
+        cmocka_unit_test(test_mirror),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
