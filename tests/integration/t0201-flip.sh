@@ -1,7 +1,8 @@
 #!/bin/sh
 # raybundle compare's FLIP: on the image pairs NVIDIA's reference tool (FLIP 1.6) was run on
 # (../shared/flip, beside the scenes; skipped without them), the mean that compare prints is the
-# tool's within 1%, HDR-FLIP for EXRs and LDR-FLIP for PNGs; --max-flip fails above its bound,
+# tool's within 1% (and so are its weighted median, quartiles, largest error and the exposures
+# HDR-FLIP chose), HDR-FLIP for EXRs and LDR-FLIP for PNGs; --max-flip fails above its bound,
 # --flip-map writes the per-pixel error (an EXR, and a PNG in FLIP's colour map, magma),
 # --no-flip leaves it out, and layers that are not RGB have none.
 . tests/integration/lib.sh
@@ -19,7 +20,7 @@ json_flip_mean() {
 
 if [ -f "$FLIP/expected.tsv" ]; then
     tail -n +2 "$FLIP/expected.tsv" >"$T/expected.tsv"
-    while IFS='	' read -r ref test kind mean rest; do
+    while IFS='	' read -r ref test kind mean wmedian q1 q3 max start stop count; do
         rb compare "$FLIP/$test" "$FLIP/$ref" --json
         expect_exit 0 "compare $test $ref exits 0"
         got=$(json_flip_mean)
@@ -29,6 +30,21 @@ if [ -f "$FLIP/expected.tsv" ]; then
             not_ok "$kind-FLIP of $test against $ref: $got, the tool's $mean within 1%"
         fi
         check "the JSON says $kind" grep -q "\"kind\": \"$kind\"" "$T/stdout"
+        # The pooled figures and, for HDR-FLIP, the exposures it chose: each within 1%.
+        for field in weighted_median:$wmedian q1:$q1 q3:$q3 max:$max exposures.start:$start \
+            exposures.stop:$stop exposures.count:$count; do
+            name=${field%%:*} want=${field#*:}
+            [ "$want" = - ] && continue
+            got=$(python3 -c 'import json, sys
+v = json.load(open(sys.argv[1]))["flip"]
+for k in sys.argv[2].split("."):
+    v = v[k]
+print(v)' "$T/stdout" "$name")
+            # within 1% of the magnitude (an exposure may be negative)
+            check "$kind-FLIP of $test: $name $got, the tool's $want within 1%" \
+                awk -v a="$got" -v b="$want" 'BEGIN { d = a - b; if (d < 0) d = -d; m = b < 0 ? -b : b
+                    exit !(a != "" && d <= 0.01 * m) }'
+        done
     done <"$T/expected.tsv"
     a="$FLIP/lambert_b2_h1_4096_s1001.exr" b="$FLIP/lambert_b2_ref_8192.exr"
     rb compare "$a" "$b"
