@@ -853,7 +853,9 @@ static void stacked_passes(FILE *f, const struct rb_analysis_report *r, int char
 }
 
 /* A line chart of series (a NaN breaks its line), each point a dot with a tooltip; unit follows
- * the values there. The axis fits the values, or runs to fixed_max when that is above 0. */
+ * the values there. The axis fits the values, or runs to fixed_max when that is above 0. Each
+ * series is drawn 2 px wider than the next, so that where two coincide (a frame's wall time and
+ * its passes' sum, when nothing else takes time) the one underneath still shows either side. */
 static void lines(FILE *f, const struct rb_analysis_report *r, int chart, const char *id,
                   const char *title, const struct series *s, size_t series_count, const char *unit,
                   double fixed_max)
@@ -876,7 +878,8 @@ static void lines(FILE *f, const struct rb_analysis_report *r, int chart, const 
             for (size_t j = i; j < n && isfinite(value(r, &s[k], j)); j++)
                 fprintf(f, "%s%.2f,%.2f", j > i ? " " : "", rb_analysis_plot_x(&p, j),
                         rb_analysis_plot_y(&p, value(r, &s[k], j)));
-            fprintf(f, "\" fill=\"none\" stroke=\"%s\" stroke-width=\"2\"/>\n", s[k].color);
+            fprintf(f, "\" fill=\"none\" stroke=\"%s\" stroke-width=\"%zu\"/>\n", s[k].color,
+                    2 + 2 * (series_count - 1 - k));
         }
         for (size_t i = 0; i < n; i++) {
             double v = value(r, &s[k], i);
