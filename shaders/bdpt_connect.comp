@@ -214,7 +214,8 @@ void via_bundle(uint j, vec3 z1, vec3 nz, vec3 dir, rb_bundle_hit h, float cos_i
         float pdf_bundle = rb_bdpt_bundle_density(cos_in, h.t * h.t);
         w = rb_bdpt_power(pc.counts.z, pdf_bundle, pc.counts.x, pdf_bounce);
     }
-    add(id, is, n1, v1, dir, f0, f90, rough, x * (w * scale));
+    add(id, is, n1, v1, dir, f0, f90, max(rough, RB_BDPT_LEAST_ROUGHNESS), // as (b) does
+        x * (w * scale));
 }
 
 void main()
@@ -283,7 +284,11 @@ void main()
                 if (strategies != RB_BDPT_VPL && cos_in > 0.0) {
                     float pdf_bundle = rb_bdpt_bundle_density(cos_in, h.t * h.t);
                     vec3 x = from_lights(z1, nz, -dir, h.m, pdf_bundle);
-                    add(id, is, n1, v1, dir, f0, f90, rough, x * (scale / n_b));
+                    // x1's lobe at its least roughness (bdpt_vpl.glsl): a bundle's direction is
+                    // uniform, a few a pixel, and a glossy lobe seen at a grazing angle turned
+                    // the one near its peak into a bright fringe down the demo column's edge.
+                    add(id, is, n1, v1, dir, f0, f90, max(rough, RB_BDPT_LEAST_ROUGHNESS),
+                        x * (scale / n_b));
                 }
                 if (n_c > 0.0) {
                     // (c): VPL k -> z1 -> x1: one bounce from an emitter's point, two from a
