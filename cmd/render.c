@@ -51,7 +51,7 @@ struct options {
     const char *output, *out_dir, *device, *threads;
     const char *spp, *time_limit; /* as given, for messages */
     bool resume, validate, preview, quiet;
-    bool is_lenient; /* --lenient: glTF type errors are warnings */
+    bool is_lenient; /* --lenient: glTF type errors and forbidden values are warnings */
     bool is_strict;  /* --strict: a full ray-bundle node buffer fails the frame */
     bool is_openjd;  /* --progress=openjd: OpenJD progress messages on stdout */
     int verbose;
@@ -148,9 +148,12 @@ static const struct flag flags[] = {
      "enable the Khronos validation layer; any message fails",
      "it renders on the CPU, with no Vulkan device"},
     {"lenient", no_argument, O_LENIENT, FOR_ALL, NULL,
-     "glTF properties of the wrong type are warnings, not errors", NULL},
+     "glTF properties of the wrong type, and values glTF 2.0\n"
+     "forbids, are warnings, not errors",
+     NULL},
     {"strict", no_argument, O_STRICT, FOR_RENDER | FOR_BENCH, NULL,
-     "bdpt: a full ray-bundle node buffer fails the frame (exit 1)",
+     "a frame with NaN or Inf values, or (bdpt) a full ray-bundle\n"
+     "node buffer, fails (exit 1)",
      "it renders on the CPU, with no ray-bundle node buffer"},
     {"spp", required_argument, O_SPP, FOR_ALL, "N",
      "reference: samples per pixel (integrator.reference.spp)", NULL},
@@ -732,7 +735,8 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
     if ((st = rb_scene_load(job->scene_path, o->is_lenient ? RB_SCENE_LOAD_LENIENT : 0, &scene,
                             &err)) ||
         (job->environment.map &&
-         (st = rb_render_load_env(job->environment.map, &env, &env_w, &env_h, &err))) ||
+         (st = rb_render_load_env(job->environment.map, job->environment.intensity, &env, &env_w,
+                                  &env_h, &err))) ||
         (st = rb_scene_setup_init(job, scene, env, env_w, env_h, &setup, &err))) {
         cmd_error("%s", err.msg);
         rc = exit_for(st, false);

@@ -174,6 +174,11 @@ struct rb_pass_time {
 
 #define RB_PI 3.14159265358979323846f
 
+/* The most radiance (a colour times its intensity or strength) a light, an emitter or the
+ * environment may have, from the scene or the job: far above any real one, and low enough that
+ * the renderer's float sums and products of such values stay finite (FLT_MAX is 3.4e38). */
+#define RB_MAX_RADIANCE 1e30
+
 struct rb_vec3 {
     float x, y, z;
 };

@@ -1154,6 +1154,11 @@ static enum rb_status check_light(struct ctx *c, void *items, size_t i, const ch
                     mark_of(marks, "lights[].inner_cone_deg", "lights[].outer_cone_deg", item_mark),
                     RB_E_INVALID, "'%s.inner_cone_deg' (%g) must be <= its outer_cone_deg (%g)",
                     shown, l->inner_cone_deg, l->outer_cone_deg);
+    double peak = fmax(fmax(l->color[0], l->color[1]), l->color[2]);
+    if (!(peak * l->intensity <= RB_MAX_RADIANCE))
+        return fail(c, mark_of(marks, "lights[].intensity", "lights[].color", item_mark),
+                    RB_E_INVALID, "'%s.color' x '%s.intensity' is %g, more than %g", shown, shown,
+                    peak * l->intensity, RB_MAX_RADIANCE);
     return RB_OK;
 }
 
@@ -1229,6 +1234,14 @@ static enum rb_status validate(struct ctx *c)
         return fail(c, mark_of(m, "camera.far", "camera.near", &c->root), RB_E_INVALID,
                     "'camera.far' (%g) must be greater than 'camera.near' (%g)", job->camera.far_m,
                     job->camera.near_m);
+
+    /* Each may be in range while their product, the radiance, overflows the renderer's floats. */
+    const float *env = job->environment.color;
+    double env_peak = fmax(fmax(env[0], env[1]), env[2]) * job->environment.intensity;
+    if (!(env_peak <= RB_MAX_RADIANCE))
+        return fail(c, later_mark(m, "environment.color", "environment.intensity"), RB_E_INVALID,
+                    "'environment.color' x 'environment.intensity' is %g, more than %g", env_peak,
+                    RB_MAX_RADIANCE);
 
     for (size_t i = 0; i < KEY_COUNT; i++) {
         if (!(keys[i].flags & KF_MUST_EXIST) || keys[i].type != KT_PATH)

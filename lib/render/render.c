@@ -595,6 +595,11 @@ enum rb_status rb_render_frame(struct rb_render *r, int frame, const char *path,
                                           .nonfinite_count = f.nonfinite_count};
     if (info->is_partial)
         return RB_OK; /* never under the frame's name: --resume renders it again */
+    if (r->strict && f.nonfinite_count)
+        return rb_errf(err, RB_E_INVALID,
+                       "frame %d: %u non-finite values (NaN or Inf) in the output, and --strict "
+                       "makes that an error",
+                       frame, f.nonfinite_count);
     if (r->strict && f.bundle_nodes_dropped)
         return rb_errf(err, RB_E_NOMEM,
                        "frame %d: the ray-bundle node buffer overflowed (%u fragments dropped; a "
@@ -648,8 +653,8 @@ enum rb_status rb_render_check_space(const char *path, bool has_preview, int fra
                    frames_left, need / 1e9, frame / 1e3, have / 1e9);
 }
 
-enum rb_status rb_render_load_env(const char *path, float **out, uint32_t *width_px,
-                                  uint32_t *height_px, struct rb_err *err)
+enum rb_status rb_render_load_env(const char *path, double intensity, float **out,
+                                  uint32_t *width_px, uint32_t *height_px, struct rb_err *err)
 {
     struct rb_io_image img = {0};
     enum rb_status st = rb_io_image_read(path, &img, err);
@@ -669,6 +674,26 @@ enum rb_status rb_render_load_env(const char *path, float **out, uint32_t *width
             px[i * 4 + c] =
                 c == 3 ? (img.channel_count >= 4 ? s[3] : 1.0f) : s[c < img.channel_count ? c : 0];
         }
+    /* Radiance, the colours times environment.intensity: finite, >= 0 and within the bound. */
+    for (size_t i = 0; i < n * 4; i++) {
+        double v = px[i] * intensity;
+        if (i % 4 == 3 || (v >= 0 && v <= RB_MAX_RADIANCE))
+            continue;
+        size_t x = i / 4 % img.width_px, y = i / 4 / img.width_px;
+        if (!(px[i] >= 0) || !isfinite(px[i]))
+            st = rb_errf(err, RB_E_INVALID,
+                         "environment map '%s': pixel (%zu, %zu) channel %zu is %g, not a finite "
+                         "number >= 0",
+                         path, x, y, i % 4, px[i]);
+        else
+            st = rb_errf(err, RB_E_INVALID,
+                         "environment map '%s': pixel (%zu, %zu) channel %zu is %g, which times "
+                         "'environment.intensity' (%g) is more than %g",
+                         path, x, y, i % 4, px[i], intensity, RB_MAX_RADIANCE);
+        free(px);
+        rb_io_image_release(&img);
+        return st;
+    }
     *out = px;
     *width_px = img.width_px;
     *height_px = img.height_px;

@@ -22,8 +22,9 @@ struct rb_render_desc {
     uint32_t env_width_px, env_height_px;
     const char *device;    /* GPU: a device name substring or index; NULL: lavapipe */
     bool validate;         /* GPU: the Khronos validation layer; any message fails */
-    bool strict;           /* bdpt: a full ray-bundle node buffer fails the frame (nothing of it
-                            * is written) instead of a warning and a flag in the sidecar */
+    bool strict;           /* a frame with non-finite output values, or (bdpt) a full
+                            * ray-bundle node buffer, fails (nothing of it is written) instead
+                            * of a warning and a count or flag in the sidecar */
     uint32_t thread_count; /* reference: worker threads; 0: every core */
     bool is_timing_only;   /* write the timing sidecar alone (raybundle bench): no EXR, PNG */
     /* reference: called after each pass of samples; returning false stops the frame, which is
@@ -167,8 +168,10 @@ enum rb_status rb_render_chunk_slurm(const char *task_id, const char *task_count
                                      struct rb_render_chunk *out, struct rb_err *err);
 
 /* Loads an environment map as RGBA floats (RGB gets A = 1; one channel is grey), freed with
- * free(). Fails with the image reader's status, the path named. */
-enum rb_status rb_render_load_env(const char *path, float **out, uint32_t *width_px,
-                                  uint32_t *height_px, struct rb_err *err);
+ * free(). Fails with the image reader's status, the path named, or with RB_E_INVALID naming the
+ * first pixel whose colour is not finite, is negative, or times intensity (the job's
+ * environment.intensity) is more than RB_MAX_RADIANCE. */
+enum rb_status rb_render_load_env(const char *path, double intensity, float **out,
+                                  uint32_t *width_px, uint32_t *height_px, struct rb_err *err);
 
 #endif

@@ -576,6 +576,15 @@ void mirror(Doc &d)
         o.outer_cone = l.spot.outerConeAngle;
         d.lights.push_back(o);
     }
+    // tinygltf keeps the extension's JSON beside the lights it read from it: whether a range
+    // was given at all is only there.
+    const tinygltf::Value *lp = find_ext(m.extensions, "KHR_lights_punctual");
+    if (lp && lp->IsObject() && lp->Has("lights") && lp->Get("lights").IsArray()) {
+        const tinygltf::Value &ls = lp->Get("lights");
+        for (size_t i = 0; i < d.lights.size() && i < ls.ArrayLen(); i++)
+            d.lights[i].has_range =
+                ls.Get(static_cast<int>(i)).IsObject() && ls.Get(static_cast<int>(i)).Has("range");
+    }
     d.anim_samplers.reserve(m.animations.size());
     d.anim_channels.reserve(m.animations.size());
     for (const auto &a : m.animations) {
@@ -606,6 +615,8 @@ void mirror(Doc &d)
     rb_gltf_doc &p = d.pub;
     p.errors = d.errors.c_str();
     p.warnings = d.warnings.c_str();
+    p.version = m.asset.version.c_str();
+    p.min_version = m.asset.minVersion.c_str();
     p.accessors = d.accessors.data();
     p.accessor_count = d.accessors.size();
     p.buffer_views = d.views.data();
@@ -927,6 +938,8 @@ extern "C" enum rb_status rb_gltf_shim_load(const char *path, const struct rb_gl
         d->warnings = join_lines(twarn, "\n");
         sort_errors(terr, &d->errors, &d->warnings);
         mirror(*d);
+        if (binary && data.size() >= 12)
+            d->pub.glb_version = le32(&data[4]);
         d->pub.impl = d.get();
         *out = &d.release()->pub;
         return RB_OK;

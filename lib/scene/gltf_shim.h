@@ -140,6 +140,7 @@ struct rb_gltf_light {
     const double *color;
     size_t color_count;
     double intensity, range, inner_cone, outer_cone;
+    bool has_range; /* range present in the JSON (tinygltf reads an absent one as 0) */
 };
 
 struct rb_gltf_anim_sampler {
@@ -171,6 +172,8 @@ struct rb_gltf_doc {
     const char *errors;   /* what tinygltf found wrong in a file it still loaded (a primitive it
                            * dropped, a misaligned chunk), one per line; "" when none */
     const char *warnings; /* tinygltf's warnings (an image it could not load), one per line */
+    const char *version, *min_version; /* asset.version and asset.minVersion; "" when absent */
+    uint32_t glb_version;              /* a .glb's container version; 0 for a .gltf */
     const struct rb_gltf_accessor *accessors;
     size_t accessor_count;
     const struct rb_gltf_buffer_view *buffer_views;

@@ -5,6 +5,7 @@
 #include "scene/scene_int.h"
 
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -52,6 +53,8 @@ struct conv {
     const struct rb_gltf_doc *doc;
     struct rb_scene *s;
     struct rb_err *err;
+    bool is_lenient;   /* RB_SCENE_LOAD_LENIENT: violations are warnings */
+    char prim_ptr[64]; /* JSON pointer of the primitive being converted */
     size_t vertex_cap, index_cap, morph_cap, prim_cap;
     uint32_t *image_texture; /* doc image -> scene texture, or NONE when unused */
     uint32_t *mesh_targets;  /* per doc mesh: morph target count */
@@ -74,6 +77,34 @@ const char *rb_scene_label(char *buf, size_t size, const char *kind, const char 
 }
 
 #define LABEL(buf, kind, name, index) rb_scene_label(buf, sizeof(buf), kind, name, index)
+
+/* A value glTF 2.0 forbids, or one the renderer's float arithmetic cannot carry (msg names it by
+ * its JSON pointer): an error, or with RB_SCENE_LOAD_LENIENT a warning, and the load goes on with
+ * the value as read unless the caller repairs it. RB_OK when the load goes on. */
+static enum rb_status violation(struct conv *c, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+static enum rb_status violation(struct conv *c, const char *fmt, ...)
+{
+    char msg[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof(msg), fmt, ap);
+    va_end(ap);
+    if (!c->is_lenient)
+        return rb_errf(c->err, RB_E_PARSE, "%s", msg);
+    rb_log(RB_LOG_WARN, "scene '%s': %s", c->s->path, msg);
+    return RB_OK;
+}
+
+/* Whether v[0..n) are all finite once converted to float; *at: the first that is not. */
+static bool floats_finite(const double *v, size_t n, size_t *at)
+{
+    for (*at = 0; *at < n; (*at)++)
+        if (!isfinite((float)v[*at]))
+            return false;
+    return true;
+}
 
 static bool grow(void **p, size_t *cap, size_t need, size_t elem)
 {
@@ -310,9 +341,10 @@ static enum rb_status sparse_open(struct conv *c, const struct acc *v, const uin
                       (size_t)*count * v->comps * v->csize, val, what);
 }
 
-/* Decodes a whole accessor (sparse values applied) into count * comps floats. */
-static enum rb_status acc_floats(struct conv *c, int32_t index, int32_t want_type, float **out,
-                                 struct acc *v)
+/* Decodes a whole accessor (sparse values applied) into count * comps floats. use: the JSON
+ * pointer of the property that refers to it, for the message when a value is not finite. */
+static enum rb_status acc_floats(struct conv *c, int32_t index, int32_t want_type, const char *use,
+                                 float **out, struct acc *v)
 {
     enum rb_status st = acc_open(c, index, want_type, v);
     if (st)
@@ -352,6 +384,17 @@ static enum rb_status acc_floats(struct conv *c, int32_t index, int32_t want_typ
             free(f);
             return st;
         }
+    }
+    size_t total = v->count * v->comps, bad = 0, first = 0;
+    for (size_t i = 0; i < total; i++)
+        if (!isfinite(f[i]) && !bad++)
+            first = i;
+    if (bad && (st = violation(c,
+                               "%s: accessor %d: %zu of %zu values are not finite (NaN or Inf), "
+                               "the first in element %zu",
+                               use, index, bad, total, first / v->comps))) {
+        free(f);
+        return st;
     }
     *out = f;
     return RB_OK;
@@ -532,6 +575,45 @@ static enum rb_status texture_index(struct conv *c, const struct rb_gltf_texture
     return RB_OK;
 }
 
+/* A material's factors must be finite in float, and its emission (emissiveFactor times
+ * KHR_materials_emissive_strength) not negative and at most RB_MAX_RADIANCE. */
+static enum rb_status check_material(struct conv *c, const struct rb_gltf_material *g, size_t i,
+                                     double strength)
+{
+    const double scalars[] = {g->metallic, g->roughness, g->normal_scale, g->alpha_cutoff,
+                              g->has_specular ? g->specular_factor : 1.0};
+    static const char *const names[] = {
+        "pbrMetallicRoughness/metallicFactor", "pbrMetallicRoughness/roughnessFactor",
+        "normalTexture/scale", "alphaCutoff", "extensions/KHR_materials_specular/specularFactor"};
+    size_t at;
+    enum rb_status st = RB_OK;
+    if (!floats_finite(g->base_color, 4, &at))
+        st = violation(c,
+                       "/materials/%zu/pbrMetallicRoughness/baseColorFactor: value %zu (%g) "
+                       "is not finite in float",
+                       i, at, g->base_color[at]);
+    if (!st && !floats_finite(scalars, 5, &at))
+        st =
+            violation(c, "/materials/%zu/%s: %g is not finite in float", i, names[at], scalars[at]);
+    const char *strength_name = g->has_emissive_strength
+                                    ? " x extensions/KHR_materials_emissive_strength/"
+                                      "emissiveStrength"
+                                    : "";
+    double lo = 0, hi = 0; /* the least and the most of the three products */
+    for (int k = 0; k < 3; k++) {
+        double e = g->emissive[k] * strength;
+        lo = k ? fmin(lo, e) : e;
+        hi = k ? fmax(hi, e) : e;
+    }
+    if (!st && lo < 0)
+        st =
+            violation(c, "/materials/%zu: emissiveFactor%s is negative (%g)", i, strength_name, lo);
+    else if (!st && !(hi <= RB_MAX_RADIANCE))
+        st = violation(c, "/materials/%zu: emissiveFactor%s is %g, more than %g", i, strength_name,
+                       hi, RB_MAX_RADIANCE);
+    return st;
+}
+
 static enum rb_status convert_materials(struct conv *c)
 {
     const struct rb_gltf_doc *d = c->doc;
@@ -554,6 +636,9 @@ static enum rb_status convert_materials(struct conv *c)
         for (int k = 0; k < 4; k++)
             m->base_color[k] = (float)g->base_color[k];
         double strength = g->has_emissive_strength ? g->emissive_strength : 1.0;
+        enum rb_status st = check_material(c, g, i, strength);
+        if (st)
+            return st;
         for (int k = 0; k < 3; k++)
             m->emissive[k] = (float)(g->emissive[k] * strength);
         m->specular_factor = g->has_specular ? (float)g->specular_factor : 1.0f;
@@ -577,8 +662,7 @@ static enum rb_status convert_materials(struct conv *c)
                    g->alpha_mode);
             m->alpha_mode = RB_ALPHA_OPAQUE;
         }
-        enum rb_status st =
-            texture_index(c, &g->base_color_tex, what, "baseColor", &m->base_color_tex);
+        st = texture_index(c, &g->base_color_tex, what, "baseColor", &m->base_color_tex);
         if (!st)
             st = texture_index(c, &g->metallic_roughness_tex, what, "metallicRoughness",
                                &m->metallic_roughness_tex);
@@ -671,12 +755,56 @@ static void generate_tangents(struct rb_scene_vertex *v, uint32_t nv, const uint
     }
 }
 
-/* Reads one vertex attribute with a count check against POSITION. */
+/* Normals of length 0 (glTF 3.7.2.1 wants unit ones) are replaced, with a warning, by the
+ * area-weighted normal of the triangles around them; a vertex no proper triangle uses gets +Z. */
+static void repair_normals(struct conv *c, int32_t index, const char *use, const float *pos,
+                           float *nrm, size_t n, const uint32_t *tri, size_t ntri)
+{
+    size_t bad = 0;
+    for (size_t i = 0; i < n; i++)
+        if (!(rb_v3_length(v3f(nrm + i * 3)) > 0.0f))
+            bad++;
+    if (!bad)
+        return;
+    rb_log(RB_LOG_WARN,
+           "scene '%s': %s: accessor %d: %zu of %zu normals have length 0; each is replaced by "
+           "the normal of the faces around it",
+           c->s->path, use, index, bad, n);
+    bool *fix = calloc(n, sizeof(bool));
+    if (!fix) /* the fallback alone, without the faces */
+        for (size_t i = 0; i < n; i++)
+            if (!(rb_v3_length(v3f(nrm + i * 3)) > 0.0f))
+                nrm[i * 3 + 2] = 1.0f;
+    for (size_t i = 0; fix && i < n; i++)
+        fix[i] = !(rb_v3_length(v3f(nrm + i * 3)) > 0.0f);
+    for (size_t t = 0; fix && t < ntri; t++) {
+        const uint32_t *k = tri + 3 * t;
+        struct rb_vec3 e1 = rb_v3_sub(v3f(pos + k[1] * 3), v3f(pos + k[0] * 3));
+        struct rb_vec3 e2 = rb_v3_sub(v3f(pos + k[2] * 3), v3f(pos + k[0] * 3));
+        struct rb_vec3 fn = rb_v3_cross(e1, e2); /* its length is twice the area */
+        for (int j = 0; j < 3; j++)
+            if (fix[k[j]]) {
+                float *o = nrm + k[j] * 3;
+                o[0] += fn.x, o[1] += fn.y, o[2] += fn.z;
+            }
+    }
+    for (size_t i = 0; fix && i < n; i++) {
+        if (!fix[i])
+            continue;
+        struct rb_vec3 m = rb_v3_normalize(v3f(nrm + i * 3));
+        if (!(rb_v3_length(m) > 0.5f))
+            m = rb_v3(0, 0, 1);
+        nrm[i * 3] = m.x, nrm[i * 3 + 1] = m.y, nrm[i * 3 + 2] = m.z;
+    }
+    free(fix);
+}
+
+/* Reads one vertex attribute with a count check against POSITION. use: its JSON pointer. */
 static enum rb_status read_attr(struct conv *c, int32_t index, int32_t type, size_t n,
-                                const char *name, float **out)
+                                const char *name, const char *use, float **out)
 {
     struct acc v;
-    enum rb_status st = acc_floats(c, index, type, out, &v);
+    enum rb_status st = acc_floats(c, index, type, use, out, &v);
     if (st)
         return st;
     if (v.count != n) {
@@ -702,20 +830,24 @@ static enum rb_status convert_geometry(struct conv *c, const struct rb_gltf_prim
     struct acc v;
     int mode = gp->mode == -1 ? 4 : gp->mode;
 
-    st = acc_floats(c, attr[A_POSITION], TYPE_VEC3, &pos, &v);
+    char use[A_COUNT][96];
+    for (int a = 0; a < A_COUNT; a++)
+        snprintf(use[a], sizeof(use[a]), "%s/attributes/%s", c->prim_ptr, attr_names[a]);
+    st = acc_floats(c, attr[A_POSITION], TYPE_VEC3, use[A_POSITION], &pos, &v);
     if (st)
         goto out;
     size_t n = v.count;
-    if (attr[A_NORMAL] != -1 && (st = read_attr(c, attr[A_NORMAL], TYPE_VEC3, n, "NORMAL", &nrm)))
+    if (attr[A_NORMAL] != -1 &&
+        (st = read_attr(c, attr[A_NORMAL], TYPE_VEC3, n, "NORMAL", use[A_NORMAL], &nrm)))
         goto out;
     if (attr[A_TANGENT] != -1 &&
-        (st = read_attr(c, attr[A_TANGENT], TYPE_VEC4, n, "TANGENT", &tan)))
+        (st = read_attr(c, attr[A_TANGENT], TYPE_VEC4, n, "TANGENT", use[A_TANGENT], &tan)))
         goto out;
     if (attr[A_TEXCOORD] != -1 &&
-        (st = read_attr(c, attr[A_TEXCOORD], TYPE_VEC2, n, "TEXCOORD_0", &uv)))
+        (st = read_attr(c, attr[A_TEXCOORD], TYPE_VEC2, n, "TEXCOORD_0", use[A_TEXCOORD], &uv)))
         goto out;
     if (attr[A_JOINTS] != -1 && attr[A_WEIGHTS] != -1) {
-        if ((st = read_attr(c, attr[A_WEIGHTS], TYPE_VEC4, n, "WEIGHTS_0", &wgt)))
+        if ((st = read_attr(c, attr[A_WEIGHTS], TYPE_VEC4, n, "WEIGHTS_0", use[A_WEIGHTS], &wgt)))
             goto out;
         if ((st = acc_uints(c, attr[A_JOINTS], TYPE_VEC4, &jnt, &v)))
             goto out;
@@ -768,6 +900,9 @@ static enum rb_status convert_geometry(struct conv *c, const struct rb_gltf_prim
         tri[3 * t + 1] = src ? src[b] : (uint32_t)b;
         tri[3 * t + 2] = src ? src[cc] : (uint32_t)cc;
     }
+
+    if (nrm)
+        repair_normals(c, attr[A_NORMAL], use[A_NORMAL], pos, nrm, n, tri, ntri);
 
     /* Without normals every triangle gets its own three vertices and a flat normal. */
     bool flat = nrm == NULL;
@@ -851,9 +986,12 @@ static enum rb_status convert_geometry(struct conv *c, const struct rb_gltf_prim
         const struct rb_gltf_target *tg = &gp->targets[t];
         int32_t ap = find_attr(tg->attributes, tg->attribute_count, "POSITION");
         int32_t an = find_attr(tg->attributes, tg->attribute_count, "NORMAL");
-        if (ap != -1 && (st = read_attr(c, ap, TYPE_VEC3, n, "target POSITION", &dpos)))
+        char tuse[2][128];
+        snprintf(tuse[0], sizeof(tuse[0]), "%s/targets/%zu/POSITION", c->prim_ptr, t);
+        snprintf(tuse[1], sizeof(tuse[1]), "%s/targets/%zu/NORMAL", c->prim_ptr, t);
+        if (ap != -1 && (st = read_attr(c, ap, TYPE_VEC3, n, "target POSITION", tuse[0], &dpos)))
             goto target_fail;
-        if (an != -1 && (st = read_attr(c, an, TYPE_VEC3, n, "target NORMAL", &dnrm)))
+        if (an != -1 && (st = read_attr(c, an, TYPE_VEC3, n, "target NORMAL", tuse[1], &dnrm)))
             goto target_fail;
         for (size_t i = 0; i < nv; i++) {
             size_t k = flat ? tri[i] : i;
@@ -931,6 +1069,8 @@ static enum rb_status convert_primitive(struct conv *c, size_t mesh_index, size_
     char what[200], mesh_label[160];
     LABEL(mesh_label, "mesh", d->meshes[mesh_index].name, mesh_index);
     snprintf(what, sizeof(what), "%s primitive %zu", mesh_label, prim_index);
+    snprintf(c->prim_ptr, sizeof(c->prim_ptr), "/meshes/%zu/primitives/%zu", mesh_index,
+             prim_index);
     *skipped = false;
 
     int mode = gp->mode == -1 ? 4 : gp->mode;
@@ -1115,6 +1255,34 @@ static bool decompose(const double *m, struct rb_vec3 *t, struct rb_quat *r, str
     return affine && !shear;
 }
 
+/* A node's matrix and TRS must be finite in float, and its rotation not 0 (which
+ * rb_quat_normalize turns into the identity). */
+static enum rb_status check_trs(struct conv *c, const struct rb_gltf_node *g, size_t i)
+{
+    const struct {
+        const char *name;
+        const double *v;
+        size_t count;
+    } props[] = {{"matrix", g->matrix, g->matrix_count},
+                 {"translation", g->translation, g->translation_count},
+                 {"rotation", g->rotation, g->rotation_count},
+                 {"scale", g->scale, g->scale_count}};
+    enum rb_status st = RB_OK;
+    for (size_t p = 0; !st && p < sizeof(props) / sizeof(props[0]); p++) {
+        size_t at;
+        if (!floats_finite(props[p].v, props[p].count, &at))
+            st = violation(c, "/nodes/%zu/%s: value %zu (%g) is not finite in float", i,
+                           props[p].name, at, props[p].v[at]);
+    }
+    if (!st && g->rotation_count == 4 && g->rotation[0] == 0 && g->rotation[1] == 0 &&
+        g->rotation[2] == 0 && g->rotation[3] == 0)
+        st = violation(c,
+                       "/nodes/%zu/rotation: [0, 0, 0, 0] has length 0, and a rotation is a "
+                       "unit quaternion",
+                       i);
+    return st;
+}
+
 static enum rb_status convert_nodes(struct conv *c)
 {
     const struct rb_gltf_doc *d = c->doc;
@@ -1137,6 +1305,9 @@ static enum rb_status convert_nodes(struct conv *c)
         n->translation = rb_v3(0, 0, 0);
         n->rotation = rb_quat_identity();
         n->scale = rb_v3(1, 1, 1);
+        enum rb_status st = check_trs(c, g, i);
+        if (st)
+            return st;
         if (g->matrix_count) {
             if (g->matrix_count != 16)
                 return rb_errf(c->err, RB_E_PARSE, "%s: matrix has %zu values", what,
@@ -1284,7 +1455,9 @@ static enum rb_status convert_skins(struct conv *c)
         if (g->inverse_bind_matrices != -1) {
             float *f = NULL;
             struct acc v;
-            enum rb_status st = acc_floats(c, g->inverse_bind_matrices, TYPE_MAT4, &f, &v);
+            char use[64];
+            snprintf(use, sizeof(use), "/skins/%zu/inverseBindMatrices", i);
+            enum rb_status st = acc_floats(c, g->inverse_bind_matrices, TYPE_MAT4, use, &f, &v);
             if (!st && v.count < n)
                 st = rb_errf(c->err, RB_E_PARSE, "%zu inverse bind matrices for %zu joints",
                              v.count, n);
@@ -1314,6 +1487,38 @@ static enum rb_status convert_skins(struct conv *c)
             }
     }
     return RB_OK;
+}
+
+/* KHR_lights_punctual: a colour of finite components >= 0, an intensity >= 0, their product
+ * at most RB_MAX_RADIANCE, and a range > 0 when there is one. */
+static enum rb_status check_light(struct conv *c, const struct rb_gltf_light *g, size_t i)
+{
+    enum rb_status st = RB_OK;
+    double peak = 1.0; /* the colour's largest component */
+    for (size_t k = 0; k < g->color_count; k++) {
+        if (!(g->color[k] >= 0) || !isfinite((float)g->color[k])) {
+            st = violation(c,
+                           "/extensions/KHR_lights_punctual/lights/%zu/color: value %zu (%g) "
+                           "is not a finite number >= 0",
+                           i, k, g->color[k]);
+            break;
+        }
+        peak = k ? fmax(peak, g->color[k]) : g->color[k];
+    }
+    if (!st && !(g->intensity >= 0))
+        st = violation(c, "/extensions/KHR_lights_punctual/lights/%zu/intensity: %g is negative", i,
+                       g->intensity);
+    else if (!st && !(peak * g->intensity <= RB_MAX_RADIANCE))
+        st = violation(c,
+                       "/extensions/KHR_lights_punctual/lights/%zu: color x intensity is %g, "
+                       "more than %g",
+                       i, peak * g->intensity, RB_MAX_RADIANCE);
+    if (!st && g->has_range && !(g->range > 0 && isfinite((float)g->range)))
+        st = violation(c,
+                       "/extensions/KHR_lights_punctual/lights/%zu/range: %g, and a range "
+                       "must be > 0 (and finite in float)",
+                       i, g->range);
+    return st;
 }
 
 static enum rb_status convert_cameras_lights(struct conv *c)
@@ -1381,15 +1586,24 @@ static enum rb_status convert_cameras_lights(struct conv *c)
               l->outer_cone_rad <= RB_PI / 2 + 1e-6f))
             return rb_errf(c->err, RB_E_PARSE,
                            "%s: need 0 <= innerConeAngle < outerConeAngle <= pi/2", what);
+        enum rb_status st = check_light(c, g, i);
+        if (st)
+            return st;
+        if (g->has_range && !(g->range > 0 && isfinite(l->range)))
+            l->range = 0.0f; /* lenient: no range, as if it were absent */
     }
     return RB_OK;
 }
 
 /* ---- animations ---------------------------------------------------------------------------- */
 
+/* ptr: the sampler's JSON pointer. */
 static enum rb_status convert_sampler(struct conv *c, const struct rb_gltf_anim_sampler *g,
-                                      struct rb_scene_anim_sampler *o)
+                                      const char *ptr, struct rb_scene_anim_sampler *o)
 {
+    char use[2][96];
+    snprintf(use[0], sizeof(use[0]), "%s/input", ptr);
+    snprintf(use[1], sizeof(use[1]), "%s/output", ptr);
     if (!strcmp(g->interpolation, "LINEAR"))
         o->interpolation = RB_ANIM_LINEAR;
     else if (!strcmp(g->interpolation, "STEP"))
@@ -1399,7 +1613,7 @@ static enum rb_status convert_sampler(struct conv *c, const struct rb_gltf_anim_
     else
         return rb_errf(c->err, RB_E_PARSE, "unknown interpolation '%s'", g->interpolation);
     struct acc in, out;
-    enum rb_status st = acc_floats(c, g->input, TYPE_SCALAR, &o->times, &in);
+    enum rb_status st = acc_floats(c, g->input, TYPE_SCALAR, use[0], &o->times, &in);
     if (st)
         return st;
     if (in.count == 0)
@@ -1409,7 +1623,7 @@ static enum rb_status convert_sampler(struct conv *c, const struct rb_gltf_anim_
             return rb_errf(c->err, RB_E_PARSE, "input accessor %d: key times must increase",
                            g->input);
     o->key_count = (uint32_t)in.count;
-    if ((st = acc_floats(c, g->output, 0, &o->values, &out)))
+    if ((st = acc_floats(c, g->output, 0, use[1], &o->values, &out)))
         return st;
     size_t mult = o->interpolation == RB_ANIM_CUBICSPLINE ? 3 : 1;
     size_t elems = out.count * out.comps, per = in.count * mult;
@@ -1419,6 +1633,29 @@ static enum rb_status convert_sampler(struct conv *c, const struct rb_gltf_anim_
                        elems, in.count, mult == 3 ? " x 3" : "");
     o->components = (uint32_t)(elems / per);
     return RB_OK;
+}
+
+/* The keys of a rotation sampler (the values, not a cubic spline's tangents) must not be 0,
+ * which no slerp can normalize; lenient, they become the identity. */
+static enum rb_status check_rotations(struct conv *c, struct rb_scene_anim_sampler *sm, size_t anim,
+                                      size_t sampler, int32_t output, size_t channel)
+{
+    size_t per = sm->interpolation == RB_ANIM_CUBICSPLINE ? 3 : 1, bad = 0, first = 0;
+    for (size_t k = 0; k < sm->key_count; k++) {
+        float *q = sm->values + (k * per + (per == 3)) * 4;
+        if (q[0] == 0 && q[1] == 0 && q[2] == 0 && q[3] == 0) {
+            if (!bad++)
+                first = k;
+            q[3] = 1.0f;
+        }
+    }
+    if (!bad)
+        return RB_OK;
+    return violation(c,
+                     "/animations/%zu/samplers/%zu/output: accessor %d: %zu of %u keys are "
+                     "[0, 0, 0, 0] (the first: key %zu), and the rotations of "
+                     "/animations/%zu/channels/%zu are unit quaternions",
+                     anim, sampler, output, bad, sm->key_count, first, anim, channel);
 }
 
 static enum rb_status convert_animations(struct conv *c)
@@ -1441,12 +1678,20 @@ static enum rb_status convert_animations(struct conv *c)
             return rb_errf(c->err, RB_E_NOMEM, "out of memory");
         a->sampler_count = (uint32_t)g->sampler_count;
         for (size_t k = 0; k < g->sampler_count; k++) {
-            enum rb_status st = convert_sampler(c, &g->samplers[k], &a->samplers[k]);
+            char ptr[64];
+            snprintf(ptr, sizeof(ptr), "/animations/%zu/samplers/%zu", i, k);
+            enum rb_status st = convert_sampler(c, &g->samplers[k], ptr, &a->samplers[k]);
             if (st) {
                 rb_err_prefix(c->err, "%s sampler %zu", what, k);
                 return st;
             }
             const struct rb_scene_anim_sampler *sm = &a->samplers[k];
+            if (sm->times[0] < 0 &&
+                (st = violation(c,
+                                "%s/input: accessor %d: key 0 is at %g s, and key times are "
+                                ">= 0",
+                                ptr, g->samplers[k].input, sm->times[0])))
+                return st;
             if (sm->times[sm->key_count - 1] > a->duration_s)
                 a->duration_s = sm->times[sm->key_count - 1];
         }
@@ -1490,6 +1735,11 @@ static enum rb_status convert_animations(struct conv *c)
                 return rb_errf(c->err, RB_E_PARSE,
                                "%s channel %zu: %s needs %u values per key, sampler %d has %u",
                                what, k, gc->path, want, gc->sampler, comps);
+            enum rb_status st = RB_OK;
+            if (path == RB_ANIM_ROTATION &&
+                (st = check_rotations(c, &a->samplers[gc->sampler], i, (size_t)gc->sampler,
+                                      g->samplers[gc->sampler].output, k)))
+                return st;
             a->channels[a->channel_count++] = (struct rb_scene_anim_channel){
                 .sampler = (uint32_t)gc->sampler, .node = (uint32_t)gc->node, .path = path};
         }
@@ -1515,6 +1765,45 @@ static enum rb_status check_extensions(struct conv *c)
         return rb_errf(c->err, RB_E_UNSUPPORTED, "required extension '%s' is not supported", e);
     }
     return RB_OK;
+}
+
+/* "<major>.<minor>", as glTF writes a version, into its two numbers. */
+static bool parse_version(const char *s, unsigned long *major, unsigned long *minor)
+{
+    char *end;
+    if (*s < '0' || *s > '9')
+        return false;
+    *major = strtoul(s, &end, 10);
+    if (*end != '.' || end[1] < '0' || end[1] > '9')
+        return false;
+    *minor = strtoul(end + 1, &end, 10);
+    return *end == '\0';
+}
+
+/* What glTF 2.0 asks of the document as a whole: a 2.x version that needs no more than 2.0, a
+ * binary container of version 2, and accessors of at least one element (unused ones too). */
+static enum rb_status check_document(struct conv *c)
+{
+    const struct rb_gltf_doc *d = c->doc;
+    unsigned long major = 0, minor = 0;
+    enum rb_status st = RB_OK;
+    if (d->glb_version && d->glb_version != 2)
+        st = violation(c,
+                       "GLB header: container version %u, and glTF 2.0 binary files are "
+                       "version 2",
+                       d->glb_version);
+    if (!st && !(parse_version(d->version, &major, &minor) && major == 2))
+        st = violation(c, "/asset/version: '%s' is not a glTF 2.x version", d->version);
+    if (!st && *d->min_version &&
+        !(parse_version(d->min_version, &major, &minor) && major == 2 && minor == 0))
+        st = violation(c,
+                       "/asset/minVersion: the file needs glTF '%s', and raybundle reads "
+                       "glTF 2.0",
+                       d->min_version);
+    for (size_t i = 0; !st && i < d->accessor_count; i++)
+        if (d->accessors[i].count == 0)
+            st = violation(c, "/accessors/%zu/count: 0, and an accessor has at least 1 element", i);
+    return st;
 }
 
 static void log_warnings(const char *path, const char *text)
@@ -1599,7 +1888,8 @@ enum rb_status rb_scene_load(const char *path, unsigned flags, struct rb_scene *
     }
     /* Order matters: materials need textures, primitives need materials, nodes need meshes,
      * skins need nodes and per-primitive joint ranges, channels need nodes and meshes. */
-    if ((st = check_extensions(&c)) || (st = convert_textures(&c)) ||
+    c.is_lenient = policy.is_lenient;
+    if ((st = check_document(&c)) || (st = check_extensions(&c)) || (st = convert_textures(&c)) ||
         (st = convert_materials(&c)) || (st = convert_meshes(&c)) || (st = convert_nodes(&c)) ||
         (st = mark_in_scene(&c)) || (st = convert_skins(&c)) || (st = convert_cameras_lights(&c)) ||
         (st = convert_animations(&c)) || (st = content_hash(path, doc, &c.s->content_hash, err)))

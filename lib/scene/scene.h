@@ -164,7 +164,8 @@ struct rb_scene {
 
 /* Flags for rb_scene_load; 0 is the strict default. */
 enum rb_scene_load_flags {
-    RB_SCENE_LOAD_LENIENT = 1 << 0, /* JSON type errors and tinygltf's complaints are warnings */
+    RB_SCENE_LOAD_LENIENT = 1 << 0, /* JSON type errors, tinygltf's complaints and values glTF
+                                     * forbids are warnings */
 };
 
 /* Loads a .gltf or .glb. Before tinygltf parses, the JSON (a .glb's JSON chunk) is checked
@@ -172,11 +173,15 @@ enum rb_scene_load_flags {
  * is an error naming its JSON pointer ("scene 'x.gltf': /meshes/0/primitives: expected array,
  * found object"), as is anything tinygltf complains about while loading. flags holds
  * RB_SCENE_LOAD_* bits; with RB_SCENE_LOAD_LENIENT those become warnings through rb_log and the
- * file loads as tinygltf reads it (a property of the wrong type is skipped). Unsupported features
- * that change the picture (a non-triangle primitive, a required extension we lack) are errors
- * naming the element ("mesh 'Body' primitive 2: ..."); ones that do not are warnings through
- * rb_log. Missing or corrupt files and images are errors. Returns RB_E_IO, RB_E_PARSE or
- * RB_E_UNSUPPORTED on failure; *out only on success. */
+ * file loads as tinygltf reads it (a property of the wrong type is skipped). Values glTF 2.0
+ * forbids or float arithmetic cannot carry (a version other than 2.x, an accessor of 0 elements,
+ * a NaN or Inf, a rotation of length 0, negative key times or light intensity, a light range
+ * <= 0, an emission or light above RB_MAX_RADIANCE) are errors naming their JSON pointer, and
+ * warnings with RB_SCENE_LOAD_LENIENT; normals of length 0 are replaced with a warning.
+ * Unsupported features that change the picture (a non-triangle primitive, a required extension
+ * we lack) are errors naming the element ("mesh 'Body' primitive 2: ..."); ones that do not are
+ * warnings through rb_log. Missing or corrupt files and images are errors. Returns RB_E_IO,
+ * RB_E_PARSE or RB_E_UNSUPPORTED on failure; *out only on success. */
 enum rb_status rb_scene_load(const char *path, unsigned flags, struct rb_scene **out,
                              struct rb_err *err);
 void rb_scene_destroy(struct rb_scene *scene);

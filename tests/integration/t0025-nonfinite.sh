@@ -53,6 +53,7 @@ fi
 
 # The counter can fail: an emissive triangle whose emissive factor times its
 # KHR_materials_emissive_strength overflows float (1e39 > 3.4e38), so its pixels are infinite.
+# The loader refuses such an emitter; --lenient loads it with a warning.
 # Positions (0,0,0) (1,0,0) (0,1,0), u16 indices 0 1 2, facing +Z, the camera in front of it.
 cat >"$T/inf.gltf" <<'GLTF'
 {"asset": {"version": "2.0"},
@@ -82,7 +83,11 @@ for how in render reference; do
     extra=""
     [ "$how" = reference ] && extra="--spp 1"
     rb "$how" "$T/inf.yaml" $extra --out "$T/inf-$how"
-    expect_exit 0 "$how: the overflowing emitter renders (a warning, not an error)"
+    expect_exit 2 "$how: the overflowing emitter is refused"
+    stderr_has "/materials/0: emissiveFactor x extensions/KHR_materials_emissive_strength/emissiveStrength is 1e+39, more than 1e+30" \
+        "$how: the material named"
+    rb "$how" "$T/inf.yaml" $extra --lenient --out "$T/inf-$how"
+    expect_exit 0 "$how: with --lenient the overflowing emitter renders (a warning, not an error)"
     c=$(nonfinite "$T/inf-$how/frame.0000.timing.json")
     e=$(bad_values "$T/inf-$how/frame.0000.exr")
     check "$how: the sidecar counts non-finite values (${c:-none})" test "${c:-0}" -gt 0
