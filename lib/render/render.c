@@ -633,6 +633,23 @@ static uint64_t file_size(const char *path)
     return stat(path, &sb) == 0 ? (uint64_t)sb.st_size : 0;
 }
 
+/* bytes in the unit that gives it one to three digits before the point: 512 bytes, 48 KB,
+ * 3.2 MB, 1.5 GB, 2.1 TB (powers of 1000, as file systems report free space). */
+static const char *human_bytes(uint64_t bytes, char *buf, size_t size)
+{
+    static const char *const units[] = {"KB", "MB", "GB", "TB", "PB"};
+    if (bytes < 1000) {
+        snprintf(buf, size, "%llu bytes", (unsigned long long)bytes);
+        return buf;
+    }
+    double v = (double)bytes / 1e3;
+    size_t u = 0;
+    for (; v >= 1000.0 && u + 1 < sizeof(units) / sizeof(units[0]); u++)
+        v /= 1000.0;
+    snprintf(buf, size, u == 0 ? "%.0f %s" : "%.1f %s", v, units[u]);
+    return buf;
+}
+
 enum rb_status rb_render_check_space(const char *path, bool has_preview, int frames_left,
                                      struct rb_err *err)
 {
@@ -647,10 +664,12 @@ enum rb_status rb_render_check_space(const char *path, bool has_preview, int fra
     uint64_t need = frame * (uint64_t)frames_left, have = rb_io_free_bytes(path);
     if (have == UINT64_MAX || need + need / 20 <= have)
         return RB_OK;
+    char a[32], b[32], c[32];
     return rb_errf(err, RB_E_IO,
-                   "the %d frames left need about %.1f GB at %.0f KB a frame, and the output's "
-                   "file system has %.1f GB free",
-                   frames_left, need / 1e9, frame / 1e3, have / 1e9);
+                   "the %d frames left need about %s at %s a frame, and the output's file system "
+                   "has %s free",
+                   frames_left, human_bytes(need, a, sizeof(a)), human_bytes(frame, b, sizeof(b)),
+                   human_bytes(have, c, sizeof(c)));
 }
 
 enum rb_status rb_render_load_env(const char *path, double intensity, float **out,

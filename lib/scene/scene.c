@@ -1371,7 +1371,9 @@ static enum rb_status convert_nodes(struct conv *c)
             int32_t ch = g->children[k];
             if (!valid_index(ch, d->node_count))
                 return rb_errf(c->err, RB_E_PARSE, "%s: child %d does not exist", what, ch);
-            if (s->nodes[ch].parent != NONE || (size_t)ch == i)
+            if ((size_t)ch == i)
+                return rb_errf(c->err, RB_E_PARSE, "%s: lists itself among its children", what);
+            if (s->nodes[ch].parent != NONE)
                 return rb_errf(c->err, RB_E_PARSE, "%s: node %d has more than one parent", what,
                                ch);
             s->nodes[ch].parent = (uint32_t)i;

@@ -745,7 +745,7 @@ static void test_bad_references(void **state)
         {"", "", ",\"indices\":7", "3", "cannot load"}, /* tinygltf's own check */
         {"", "", ",\"material\":3", "3", "material 3 does not exist"},
         {"", ",\"children\":[5]", "", "3", "child 5 does not exist"},
-        {"", ",\"children\":[0]", "", "3", "more than one parent"},
+        {"", ",\"children\":[0]", "", "3", "lists itself among its children"},
         {"", ",\"skin\":2", "", "3", "skin 2 does not exist"},
         {"", "", ",\"mode\":9", "3", "unknown mode 9"},
         {"", "", ",\"targets\":[{\"POSITION\":1}]", "3", "expected VEC3, found SCALAR"},
