@@ -1111,15 +1111,7 @@ enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t
     enum rb_status st = display_bytes(what, width_px, height_px, rgba, desc, false, &bytes, err);
     if (st)
         return st;
-    void *png = NULL;
-    size_t png_size = 0;
-    char msg[300];
-    if (!rb_png_encode(bytes, width_px, height_px, "raybundle " RB_VERSION, &png, &png_size, msg,
-                       sizeof(msg)))
-        st = rb_errf(err, RB_E_EXTERNAL, "cannot write '%s': %s", path, msg);
-    else
-        st = rb_io_write_atomic(path, png, png_size, err);
-    free(png);
+    st = rb_io_png_write(path, width_px, height_px, bytes, err);
     free(bytes);
     return st;
 }

@@ -8,28 +8,8 @@
 . tests/integration/lib.sh
 
 # A floor (Lambertian, white) and, in lit.gltf, a small emissive panel 1 m above it.
-write_scene() { # write_scene FILE NODES
-    cat >"$1" <<GLTF
-{"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": $2}],
- "nodes": [{"name": "Floor", "mesh": 0}, {"name": "Panel", "mesh": 1}],
- "meshes": [{"name": "Floor", "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2, "material": 0}]},
-            {"name": "Panel", "primitives": [{"attributes": {"POSITION": 3, "NORMAL": 4}, "indices": 5, "material": 1}]}],
- "materials": [{"name": "White", "doubleSided": true, "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1], "metallicFactor": 0, "roughnessFactor": 1}},
-               {"name": "Glow", "doubleSided": true, "emissiveFactor": [1, 1, 1], "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0}}],
- "buffers": [{"byteLength": 216, "uri": "data:application/octet-stream;base64,AACAvwAAAAAAAIC/AACAPwAAAAAAAIC/AACAPwAAAAAAAIA/AACAvwAAAAAAAIA/AAAAAAAAgD8AAAAAAAAAAAAAgD8AAAAAAAAAAAAAgD8AAAAAAAAAAAAAgD8AAAAAAAACAAEAAAADAAIAAACAvgAAgD8AAIC+AACAPgAAgD8AAIC+AACAPgAAgD8AAIA+AACAvgAAgD8AAIA+AAAAAAAAgL8AAAAAAAAAAAAAgL8AAAAAAAAAAAAAgL8AAAAAAAAAAAAAgL8AAAAAAAABAAIAAAACAAMA"}],
- "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 48},
-                 {"buffer": 0, "byteOffset": 96, "byteLength": 12}, {"buffer": 0, "byteOffset": 108, "byteLength": 48},
-                 {"buffer": 0, "byteOffset": 156, "byteLength": 48}, {"buffer": 0, "byteOffset": 204, "byteLength": 12}],
- "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, 0, -1], "max": [1, 0, 1]},
-               {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
-               {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"},
-               {"bufferView": 3, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-0.25, 1, -0.25], "max": [0.25, 1, 0.25]},
-               {"bufferView": 4, "componentType": 5126, "count": 4, "type": "VEC3"},
-               {"bufferView": 5, "componentType": 5123, "count": 6, "type": "SCALAR"}]}
-GLTF
-}
-write_scene "$T/lit.gltf" "[0, 1]"
-write_scene "$T/floor.gltf" "[0]"
+floor_panel_gltf "$T/lit.gltf" "[0, 1]"
+floor_panel_gltf "$T/floor.gltf" "[0]"
 # A job looking down at the floor's centre; the floor's centre is the image's centre.
 write_job() { # write_job NAME SCENE [EXTRA-YAML]: a direct-light job
     printf 'scene: %s\noutput: %s/f.####.exr\nresolution: [64, 48]\nframes: {start: 0, end: 0}\n'         "$2" "$1" >"$T/$1.yaml"

@@ -6,32 +6,11 @@
 . tests/integration/lib.sh
 
 # A floor (Lambertian, white) and a 0.5 m panel 1 m above it, emissive factor 1 times a texture
-# GLOW (its one colour 1/255 in sRGB, 0.0003 linear: the weak panel; or 255, the bright one).
-write_scene() { # write_scene FILE TEXTURE
-    cat >"$1" <<GLTF
-{"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 1]}],
- "nodes": [{"name": "Floor", "mesh": 0}, {"name": "Panel", "mesh": 1}],
- "meshes": [{"name": "Floor", "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2, "material": 0}]},
-            {"name": "Panel", "primitives": [{"attributes": {"POSITION": 3, "NORMAL": 4}, "indices": 5, "material": 1}]}],
- "images": [{"uri": "$2"}], "textures": [{"source": 0}],
- "materials": [{"name": "White", "doubleSided": true, "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1], "metallicFactor": 0, "roughnessFactor": 1}},
-               {"name": "Glow", "doubleSided": true, "emissiveFactor": [1, 1, 1], "emissiveTexture": {"index": 0}, "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0}}],
- "buffers": [{"byteLength": 216, "uri": "data:application/octet-stream;base64,AACAvwAAAAAAAIC/AACAPwAAAAAAAIC/AACAPwAAAAAAAIA/AACAvwAAAAAAAIA/AAAAAAAAgD8AAAAAAAAAAAAAgD8AAAAAAAAAAAAAgD8AAAAAAAAAAAAAgD8AAAAAAAACAAEAAAADAAIAAACAvgAAgD8AAIC+AACAPgAAgD8AAIC+AACAPgAAgD8AAIA+AACAvgAAgD8AAIA+AAAAAAAAgL8AAAAAAAAAAAAAgL8AAAAAAAAAAAAAgL8AAAAAAAAAAAAAgL8AAAAAAAABAAIAAAACAAMA"}],
- "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 48},
-                 {"buffer": 0, "byteOffset": 96, "byteLength": 12}, {"buffer": 0, "byteOffset": 108, "byteLength": 48},
-                 {"buffer": 0, "byteOffset": 156, "byteLength": 48}, {"buffer": 0, "byteOffset": 204, "byteLength": 12}],
- "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, 0, -1], "max": [1, 0, 1]},
-               {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
-               {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"},
-               {"bufferView": 3, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-0.25, 1, -0.25], "max": [0.25, 1, 0.25]},
-               {"bufferView": 4, "componentType": 5126, "count": 4, "type": "VEC3"},
-               {"bufferView": 5, "componentType": 5123, "count": 6, "type": "SCALAR"}]}
-GLTF
-}
+# (its one colour 1/255 in sRGB, 0.0003 linear: the weak panel; or 255, the bright one).
 oiiotool --create 4x4 3 --fill:color=0.004,0.004,0.004 4x4 -d uint8 -o "$T/dim.png"
 oiiotool --create 4x4 3 --fill:color=1,1,1 4x4 -d uint8 -o "$T/bright.png"
-write_scene "$T/weak.gltf" dim.png
-write_scene "$T/strong.gltf" bright.png
+floor_panel_gltf "$T/weak.gltf" "[0, 1]" dim.png
+floor_panel_gltf "$T/strong.gltf" "[0, 1]" bright.png
 default_light_of() { # default_light_of EXR: the raybundle:defaultLight attribute
     oiiotool --info -v "$1" | sed -n 's/^ *raybundle:defaultLight: "\(.*\)"$/\1/p'
 }
