@@ -415,9 +415,7 @@ static int apply_cli(const struct options *o, struct rb_job *job)
         if (opt) {
             cmd_error("%s applies to the reference integrator only, and this job renders with "
                       "'%s' (use 'raybundle reference')",
-                      opt,
-                      rb_integrator_name(job->integrator.name ? job->integrator.name
-                                                              : RB_INTEGRATOR_BDPT));
+                      opt, rb_integrator_name(job->integrator.name));
             return -1;
         }
     }

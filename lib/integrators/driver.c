@@ -17,7 +17,6 @@ static const struct rb_integrator_ops *ops_for(enum rb_integrator_kind kind)
 {
     switch (kind) {
     case RB_INTEGRATOR_DIRECT: return &rb_integrator_direct;
-    case RB_INTEGRATOR_DEFAULT:
     case RB_INTEGRATOR_BDPT: return &rb_integrator_bdpt;
     case RB_INTEGRATOR_HYBRID: return &rb_integrator_hybrid;
     default: return NULL;
@@ -27,7 +26,7 @@ static const struct rb_integrator_ops *ops_for(enum rb_integrator_kind kind)
 enum rb_status rb_integrator_create(const struct rb_integrator_desc *desc,
                                     struct rb_integrator **out, struct rb_err *err)
 {
-    enum rb_integrator_kind kind = desc->job->integrator.name;
+    enum rb_integrator_kind kind = rb_integrator_resolve(desc->job->integrator.name);
     const struct rb_integrator_ops *ops = ops_for(kind);
     if (!ops)
         return rb_errf(err, RB_E_UNSUPPORTED, "integrator '%s' is not implemented yet",

@@ -334,7 +334,8 @@ static enum rb_status upload_view_indices(struct rb_gpu *gpu, const struct rb_jo
     uint64_t budget = job->integrator.bdpt.view_triangles;
     uint32_t full = frame->index_count / 3, n = pose->instance_count;
     frame->view_index_count = frame->index_count;
-    if (job->integrator.name != RB_INTEGRATOR_BDPT || budget == 0 || budget >= full)
+    if (rb_integrator_resolve(job->integrator.name) != RB_INTEGRATOR_BDPT || budget == 0 ||
+        budget >= full)
         return RB_OK;
     uint32_t *triangles = malloc(sizeof(uint32_t) * n);
     uint32_t *targets = malloc(sizeof(uint32_t) * n);

@@ -1202,7 +1202,7 @@ static enum rb_status validate(struct ctx *c)
     /* samples and tiles say how the hybrid integrator sampled each pixel (and the reference
      * its fixed count); direct and bdpt keep no such counts, and a layer of zeros would claim
      * that they took no samples. */
-    enum rb_integrator_kind kind = job->integrator.name ? job->integrator.name : RB_INTEGRATOR_BDPT;
+    enum rb_integrator_kind kind = rb_integrator_resolve(job->integrator.name);
     for (uint32_t l = RB_LAYER_SAMPLES; l <= RB_LAYER_TILES; l++)
         if ((job->layer_mask & (1u << l)) && kind != RB_INTEGRATOR_HYBRID &&
             kind != RB_INTEGRATOR_REFERENCE)
@@ -1363,7 +1363,7 @@ void rb_job_rehash(struct rb_job *job)
     h = h_f32(h, job->environment.intensity);
     h = h_f32(h, job->environment.rotation_deg);
 
-    enum rb_integrator_kind kind = job->integrator.name ? job->integrator.name : RB_INTEGRATOR_BDPT;
+    enum rb_integrator_kind kind = rb_integrator_resolve(job->integrator.name);
     h = h_u32(h, (uint32_t)kind);
     /* Only the named integrator's settings: a frame does not depend on another's. */
     if (kind == RB_INTEGRATOR_REFERENCE) {
@@ -1603,8 +1603,7 @@ const char *rb_job_yaml_version(void)
 
 const char *rb_integrator_name(enum rb_integrator_kind kind)
 {
-    if (kind == RB_INTEGRATOR_DEFAULT)
-        kind = RB_INTEGRATOR_BDPT;
+    kind = rb_integrator_resolve(kind);
     if ((size_t)kind < COUNT(integrator_names))
         return integrator_names[kind];
     return "unknown";

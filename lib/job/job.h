@@ -256,6 +256,13 @@ void rb_job_destroy(struct rb_job *job);
 const char *rb_job_yaml_version(void);
 
 const char *rb_integrator_name(enum rb_integrator_kind kind);
+
+/* The integrator a job with integrator.name `kind` renders with: that one, or for
+ * RB_INTEGRATOR_DEFAULT (a job built without the key table's default) bdpt, the key's default. */
+static inline enum rb_integrator_kind rb_integrator_resolve(enum rb_integrator_kind kind)
+{
+    return kind == RB_INTEGRATOR_DEFAULT ? RB_INTEGRATOR_BDPT : kind;
+}
 /* Returns RB_INTEGRATOR_DEFAULT when name is unknown. */
 enum rb_integrator_kind rb_integrator_from_name(const char *name);
 

@@ -224,7 +224,7 @@ enum rb_render_verdict rb_render_resume_verdict(const struct rb_render *r, const
 {
     char timing[4096], hits[4096], recorded[32];
     /* bdpt's frames have their hit ratios beside them, written before the timing sidecar. */
-    bool has_hits = r->job->integrator.name == RB_INTEGRATOR_BDPT;
+    bool has_hits = rb_integrator_resolve(r->job->integrator.name) == RB_INTEGRATOR_BDPT;
     if (rb_io_sidecar_path(path, ".timing.json", timing, sizeof(timing), NULL) != RB_OK ||
         rb_io_sidecar_path(path, ".hits.exr", hits, sizeof(hits), NULL) != RB_OK ||
         !rb_io_image_is_complete(path) || access(timing, R_OK) != 0 ||
