@@ -9,13 +9,21 @@
 //   (c) z -> z1 through z's map, z1 -> x1 along the bundle: light -> z -> z1 -> x1 (two bounces).
 // (a) and (b)'s light connections make the same paths and are combined with the balance
 // heuristic over the sub-image's n_a VPLs and n_b bundles; (c) is the only strategy for its
-// paths. Emitters: VPL k may be a point y0 on an emitter, whose (a) is direct light (weighed
-// against (b)'s emission hits) and whose (c) is one bounce; its bounce VPL y1 (K_v + k, found
+// paths. Emitters: VPL k may be a point y0 on an emitter, whose (c) is one bounce; its (a) is
+// direct light, which the emitters' dispatch (below) makes at every pixel instead, from all the
+// frame's emitter points, weighed against (b)'s emission hits; its bounce VPL y1 (K_v + k, found
 // by its probe) makes those one-bounce paths again through (a), and the two are weighed over
 // the n_c pairs and n_a VPLs with p(y1 | y0) (y0's density is both sides' and cancels); the
 // bounce VPL's (c) is the emitter's second bounce, the only strategy for it. What reaches x1
 // is split into its BRDF's diffuse and specular parts (rb_brdf_parts)
 // and added, in k order and without atomics, to x1's own texel of four accumulators.
+// The emitters' dispatch (bounce.w = 1), once a frame over the whole split image: for each pixel
+// the direct light of every emitter point among the frame's K_v VPLs, (a) with all of them, not
+// the sub-image's share, written in image order to two images of its own that the filter adds
+// after its kernels. A sub-image's one or two points, spread over the interleave block by the
+// direct light's box, blurred every shadow edge of an area light over the block (the Cornell
+// box's contact shadows, 2 pixels each way); at every pixel the points draw it sharp, and their
+// count, K_v against the sub-image's n_a, enters the balance heuristic against the bundles.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "bindings_shared.h"
@@ -50,9 +58,11 @@ layout(binding = RB_BIND_BDPT_CONNECT_LIGHT + RB_BDPT_DIRECT_SPECULAR, rgba32f) 
 layout(binding = RB_BIND_BDPT_CONNECT_LIGHT + RB_BDPT_INDIRECT_DIFFUSE, rgba32f) uniform image2D a_indirect_diffuse;
 layout(binding = RB_BIND_BDPT_CONNECT_LIGHT + RB_BDPT_INDIRECT_SPECULAR, rgba32f) uniform image2D a_indirect_specular;
 layout(std430, binding = RB_BIND_BDPT_CONNECT_EMIT_INFO) readonly buffer EmitInfo { rb_gpu_bdpt_emit_info emit_info; };
+layout(binding = RB_BIND_BDPT_CONNECT_EMITTED + 0, rgba32f) uniform writeonly image2D e_diffuse;
+layout(binding = RB_BIND_BDPT_CONNECT_EMITTED + 1, rgba32f) uniform writeonly image2D e_specular;
 layout(push_constant) uniform Push { rb_gpu_bdpt_connect_push pc; };
 
-#define RB_BDPT_LEAST_ROUGHNESS pc.brdf.x
+#define RB_BDPT_LEAST_ROUGHNESS pc.frame.x
 #include "bdpt_vpl.glsl"
 
 #include "shadow.glsl"
@@ -60,12 +70,12 @@ layout(push_constant) uniform Push { rb_gpu_bdpt_connect_push pc; };
 
 // Whether VPL k sees p (geometric normal ng) through its paraboloid map: p is lifted off its
 // surface by a texel's footprint along ng (at most 4 / size radians at the distance) and its
-// distance from the VPL's eye tested against the stored one with a bias of vpl_bias of it. VPL
-// k of the iteration has a whole layer; its bounces (every other VPL connect sees) a corner.
+// distance from the VPL's eye tested against the stored one with a bias of vpl_bias of it. Each
+// of the K_v VPLs has a whole layer; their bounces (k >= K_v) a corner.
 float vpl_visibility(uint k, vec3 p, vec3 ng)
 {
     rb_gpu_view v = vpl_views[k];
-    float far = v.origin.w, size = k == pc.index.x ? pc.params.y : float(pc.bounce.z);
+    float far = v.origin.w, size = k < uint(pc.frame.y) ? pc.params.y : float(pc.bounce.z);
     p += ng * (length(p - v.origin.xyz) * 4.0 / size);
     vec3 q = (v.transform * vec4(p, 1.0)).xyz;
     float len = length(q);
@@ -92,7 +102,8 @@ vec3 environment(vec3 dir)
 // Radiance VPL k sends from its surface towards p (normal n at p, facing the VPL), times the
 // cosine at p: f_z power G V, G = cos_z cos_p / r^2, clamped at the clamp when one is set; an
 // emitter's point sends its emission: power G V.
-vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, out vec3 l, out float r2)
+vec3 from_vpl_spread(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, float spread, out vec3 l,
+                     out float r2)
 {
     rb_gpu_vpl z = vpls[k];
     vec3 d = z.position.xyz - p;
@@ -101,7 +112,7 @@ vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, out vec3 l, out flo
     float cos_p = dot(n, l), cos_z = -dot(z.normal.xyz, l);
     if (cos_p <= 0.0 || cos_z <= 0.0 || dot(ng, l) <= 0.0)
         return vec3(0.0);
-    float geo = cos_p * cos_z / max(r2, 1e-20);
+    float geo = cos_p * cos_z / max(r2 + spread, 1e-20);
     if (clamp_g && pc.counts.w > 0.0)
         geo = min(geo, pc.counts.w);
     if (vpl_visibility(k, p, ng) <= 0.0)
@@ -109,6 +120,11 @@ vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, out vec3 l, out flo
     if (uint(z.from.w) == RB_BDPT_VPL_EMITTER)
         return z.power.rgb * geo;
     return vpl_brdf(z, -l) * z.power.rgb * geo;
+}
+
+vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, out vec3 l, out float r2)
+{
+    return from_vpl_spread(k, p, n, ng, clamp_g, 0.0, l, r2);
 }
 
 // The light z1 reflects towards x1 (direction v) from the punctual lights, each weighted
@@ -218,8 +234,64 @@ void via_bundle(uint j, vec3 z1, vec3 nz, vec3 dir, rb_bundle_hit h, float cos_i
         x * (w * scale));
 }
 
+// The emitters' dispatch for split texel sp: the direct light of each of the frame's K_v VPLs
+// that is a point on an emitter, at the pixel sp holds, weighed against the n_b bundles of the
+// pixel's sub-image that find the emitter (rb_bdpt_balance with counts K_v and n_b). A point
+// stands for a = 1 / (K_v p) of the emitter's area (p its density) and lights as a disk of that
+// area would: cos cos / (r^2 + a / pi), which near the emitter stays below the emitter's own
+// radiance, as an area light's does, where a point's 1 / r^2 threw a bright dot on a surface
+// just beside it (the Cornell box's ceiling around the quad that hangs 0.9 units below it).
+void emitters(ivec2 sp)
+{
+    ivec2 sub = ivec2(pc.region.zw);
+    int n = int(pc.frame.w);
+    ivec2 px = (sp % sub) * n + sp / sub;
+    if (any(greaterThanEqual(px, imageSize(e_diffuse))))
+        return;
+    vec3 dd = vec3(0.0), ds = vec3(0.0);
+    vec4 pos = imageLoad(s_position, sp);
+    uint strategies = pc.index.w;
+    if (pos.w > 0.0 && strategies != RB_BDPT_BUNDLE) {
+        vec3 x1 = pos.xyz;
+        vec4 nr = imageLoad(s_normal, sp);
+        vec4 fr = imageLoad(s_fresnel, sp);
+        vec3 n1 = nr.xyz, f0 = fr.rgb, v1 = normalize(g.camera_pos.xyz - x1);
+        vec3 ng1 = rb_oct_decode(imageLoad(s_geometric, sp).xy);
+        float rough = nr.w, f90 = fr.a;
+        uint k_v = uint(pc.frame.y), k_b = uint(pc.frame.z), count = uint(n * n);
+        uint s = uint((sp.y / sub.y) * n + sp.x / sub.x);
+        float n_b = k_b > s ? float((k_b - s + count - 1u) / count) : 0.0, n_a = pc.frame.y;
+        for (uint j = 0u; j < k_v; j++) {
+            if (!(vpls[j].position.w > 0.0) || uint(vpls[j].from.w) != RB_BDPT_VPL_EMITTER)
+                continue;
+            vec3 l;
+            float r2;
+            float spread = pc.frame.y > 0.0 && vpls[j].normal.w > 0.0
+                               ? 1.0 / (RB_PI * n_a * vpls[j].normal.w)
+                               : 0.0;
+            vec3 x = from_vpl_spread(j, x1, n1, ng1, strategies == RB_BDPT_VPL, spread, l, r2);
+            if (!any(greaterThan(x, vec3(0.0))))
+                continue;
+            float w = 1.0;
+            if (strategies == RB_BDPT_MIS) {
+                float pdf_bundle = rb_bdpt_bundle_density(-dot(vpls[j].normal.xyz, l), r2);
+                w = rb_bdpt_balance(n_a, vpls[j].normal.w, n_b, pdf_bundle);
+            }
+            add(dd, ds, n1, v1, l, f0, f90, rough, x * (w / n_a));
+        }
+    }
+    imageStore(e_diffuse, px, vec4(dd, 0.0));
+    imageStore(e_specular, px, vec4(ds, 0.0));
+}
+
 void main()
 {
+    if (pc.bounce.w != 0u) {
+        ivec2 sp = ivec2(gl_GlobalInvocationID.xy);
+        if (all(lessThan(sp, imageSize(s_position))))
+            emitters(sp);
+        return;
+    }
     uvec2 local = gl_GlobalInvocationID.xy;
     if (any(greaterThanEqual(local, pc.region.zw)))
         return;
@@ -240,11 +312,11 @@ void main()
     float n_a = pc.counts.x, n_b = pc.counts.y, n_c = pc.counts.z;
     vec3 dd = vec3(0.0), ds = vec3(0.0), id = vec3(0.0), is = vec3(0.0);
 
-    // (a) VPL k -> x1: light reflected once before x1, or an emitter's point lighting x1
-    // directly (weighed against bundles that find the emitter); then the same for VPL k's
-    // bounce, light reflected once, weighed against (c) of emitter VPLs.
+    // (a) VPL k -> x1: light reflected once before x1 (an emitter's point, direct light, is the
+    // emitters' dispatch's); then the same for VPL k's bounce, light reflected once, weighed
+    // against (c) of emitter VPLs.
     if (strategies != RB_BDPT_BUNDLE) {
-        if (has_vpl)
+        if (has_vpl && uint(vpls[k].from.w) != RB_BDPT_VPL_EMITTER)
             from_vpl_at_x1(k, x1, n1, ng1, v1, f0, f90, rough, n_b, dd, ds, id, is);
         if (has_bounce)
             from_vpl_at_x1(pc.bounce.x, x1, n1, ng1, v1, f0, f90, rough, n_c, dd, ds, id, is);
@@ -271,13 +343,14 @@ void main()
                     nz = -nz;
                 float cos_in = -dot(nz, dir);
                 if (any(greaterThan(h.m.emission, vec3(0.0))) && strategies != RB_BDPT_VPL) {
-                    // Weighed against the emitters' points (a); alone when it is the only
-                    // strategy or the scene's emitters have no points (zero density).
+                    // Weighed against the emitters' points (a), all K_v of the frame's VPLs at
+                    // every pixel; alone when it is the only strategy or the scene's emitters
+                    // have no points (zero density).
                     float w = 1.0;
                     if (strategies == RB_BDPT_MIS) {
                         float lum = dot(h.m.emission, vec3(0.2126, 0.7152, 0.0722));
                         float pdf_bundle = rb_bdpt_bundle_density(abs(cos_in), h.t * h.t);
-                        w = rb_bdpt_balance(n_b, pdf_bundle, n_a, emit_info.info.y * lum);
+                        w = rb_bdpt_balance(n_b, pdf_bundle, pc.frame.y, emit_info.info.y * lum);
                     }
                     add(dd, ds, n1, v1, dir, f0, f90, rough, h.m.emission * (w * scale / n_b));
                 }

@@ -15,7 +15,9 @@
 // differently on each class of pixels either. Direct light (emitters' points and the
 // environment through the bundles), which can change fast across a surface (a wall just below an
 // area light), takes only a box of one interleave block, enough to hold a sample of every
-// sub-image. The sums run in a fixed order, so the result does not depend on scheduling.
+// sub-image. The emitters' points, each at every pixel already (connect's emitters' dispatch),
+// are added to the direct light unfiltered. The sums run in a fixed order, so the result does not
+// depend on scheduling.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "bindings_shared.h"
@@ -35,6 +37,8 @@ layout(binding = RB_BIND_BDPT_FILTER_OUT + 0, rgba32f) uniform writeonly image2D
 layout(binding = RB_BIND_BDPT_FILTER_OUT + 1, rgba32f) uniform writeonly image2D o1;
 layout(binding = RB_BIND_BDPT_FILTER_OUT + 2, rgba32f) uniform writeonly image2D o2;
 layout(binding = RB_BIND_BDPT_FILTER_OUT + 3, rgba32f) uniform writeonly image2D o3;
+layout(binding = RB_BIND_BDPT_FILTER_EMITTED + 0, rgba32f) uniform readonly image2D e0;
+layout(binding = RB_BIND_BDPT_FILTER_EMITTED + 1, rgba32f) uniform readonly image2D e1;
 layout(push_constant) uniform Push { rb_gpu_bdpt_image_push pc; };
 
 // The change of 1 / z to the next pixel along each axis: of the two neighbours' differences, the
@@ -141,8 +145,8 @@ void main()
     // reconstruct tells two surfaces apart where depth cannot (a room's concave corner, where a
     // wall and the ceiling meet at the same depth).
     vec2 slope = p.w > 0.0 ? inverse_depth_slope(px, size, 1.0 / p.w) : vec2(0.0);
-    imageStore(o0, px, vec4(s0 * inv_d, p.w));
-    imageStore(o1, px, vec4(s1 * inv_d, slope.x));
+    imageStore(o0, px, vec4(s0 * inv_d + imageLoad(e0, px).rgb, p.w));
+    imageStore(o1, px, vec4(s1 * inv_d + imageLoad(e1, px).rgb, slope.x));
     imageStore(o2, px, vec4(s2 * inv, p.w > 0.0 ? rb_normal_pack(nrm) : 0.0));
     imageStore(o3, px, vec4(s3 * inv, slope.y));
 }

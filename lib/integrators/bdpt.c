@@ -108,6 +108,8 @@ static void release(struct rb_gpu *gpu, struct bdpt *d)
         rb_gpu_image_release(gpu, &b->split[i]);
         rb_gpu_image_release(gpu, &b->accum[i]);
         rb_gpu_image_release(gpu, &b->gathered[i]);
+        if (i < RB_BDPT_EMITTED_COUNT)
+            rb_gpu_image_release(gpu, &b->emitted[i]);
         rb_gpu_image_release(gpu, &b->filtered[i]);
         rb_gpu_image_release(gpu, &b->light[i]);
     }
@@ -350,6 +352,10 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
                                  err)) == RB_OK)
             st = rb_frame_image(gpu, w, h, 1, f, storage, false, light_names[3][i], &b->light[i],
                                 err);
+    static const char *const emitted_names[RB_BDPT_EMITTED_COUNT] = {"bdpt.emitted.diffuse",
+                                                                     "bdpt.emitted.specular"};
+    for (int i = 0; i < RB_BDPT_EMITTED_COUNT && st == RB_OK; i++)
+        st = rb_frame_image(gpu, w, h, 1, f, storage, false, emitted_names[i], &b->emitted[i], err);
     if (st == RB_OK)
         st = rb_frame_image(gpu, w, h, l, f, storage | VK_IMAGE_USAGE_TRANSFER_DST_BIT, true,
                             "bdpt.reproject", &b->reproject, err);
@@ -396,6 +402,9 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
         rb_gpu_image_barrier(gpu, cmd, &b->light[i], VK_IMAGE_LAYOUT_UNDEFINED,
                              VK_IMAGE_LAYOUT_GENERAL);
     }
+    for (int i = 0; i < RB_BDPT_EMITTED_COUNT; i++)
+        rb_gpu_image_barrier(gpu, cmd, &b->emitted[i], VK_IMAGE_LAYOUT_UNDEFINED,
+                             VK_IMAGE_LAYOUT_GENERAL);
     rb_gpu_image_barrier(gpu, cmd, &b->reproject, VK_IMAGE_LAYOUT_UNDEFINED,
                          VK_IMAGE_LAYOUT_GENERAL);
     for (int i = 0; i < RB_GBUFFER_COLOR_COUNT && l > 1; i++)
@@ -655,6 +664,8 @@ static void record_bundle(struct rb_integrator *it, struct bdpt *d, VkCommandBuf
     rb_integrator_pass_end(it, cmd);
 }
 
+/* Iteration k of connect; with k = RB_NONE its emitters' dispatch, which writes b->emitted and
+ * reads what an iteration reads. */
 static void record_connect(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer cmd,
                            uint32_t k)
 {
@@ -678,6 +689,15 @@ static void record_connect(struct rb_integrator *it, struct bdpt *d, VkCommandBu
     uint32_t count = 13;
     for (int i = 0; i < RB_BDPT_SPLIT_COUNT; i++)
         uses[count++] = (struct rb_gpu_access){.image = &b->split[i], .use = RB_GPU_COMPUTE_READ};
+    if (k == RB_NONE) {
+        for (int i = 0; i < RB_BDPT_EMITTED_COUNT; i++)
+            uses[count++] =
+                (struct rb_gpu_access){.image = &b->emitted[i], .use = RB_GPU_COMPUTE_WRITE};
+        rb_integrator_pass_begin(it, cmd, "emitter_direct", uses, count);
+        rb_pass_bdpt_emitters_direct_record(d->passes, cmd, frame, b);
+        rb_integrator_pass_end(it, cmd);
+        return;
+    }
     for (int i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
         uses[count++] =
             (struct rb_gpu_access){.image = &b->accum[i], .use = RB_GPU_COMPUTE_READ_WRITE};
@@ -800,7 +820,8 @@ static void record_cache(struct rb_integrator *it, struct bdpt *d, VkCommandBuff
             record_bundle(it, d, cmd, ctx, k);
         record_connect(it, d, cmd, k);
     }
-    if (b->bundle_count) /* the counters' copies, for collect */
+    record_connect(it, d, cmd, RB_NONE); /* the emitters' points at every pixel */
+    if (b->bundle_count)                 /* the counters' copies, for collect */
         rb_gpu_memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
                               VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
                               VK_ACCESS_2_HOST_READ_BIT);
@@ -815,10 +836,13 @@ static void record_cache(struct rb_integrator *it, struct bdpt *d, VkCommandBuff
     rb_pass_bdpt_gather_record(d->passes, cmd, frame, b);
     rb_integrator_pass_end(it, cmd);
 
-    struct rb_gpu_access filter[2 + 2 * RB_BDPT_LIGHT_COUNT] = {
+    struct rb_gpu_access filter[2 + 2 * RB_BDPT_LIGHT_COUNT + RB_BDPT_EMITTED_COUNT] = {
         {.image = &gb[RB_GB_POSITION], .use = RB_GPU_COMPUTE_READ},
         {.image = &gb[RB_GB_NORMAL], .use = RB_GPU_COMPUTE_READ},
     };
+    for (int i = 0; i < RB_BDPT_EMITTED_COUNT; i++)
+        filter[2 + 2 * RB_BDPT_LIGHT_COUNT + i] =
+            (struct rb_gpu_access){.image = &b->emitted[i], .use = RB_GPU_COMPUTE_READ};
     for (int i = 0; i < RB_BDPT_LIGHT_COUNT; i++) {
         filter[2 + 2 * i] =
             (struct rb_gpu_access){.image = &b->gathered[i], .use = RB_GPU_COMPUTE_READ};

@@ -116,6 +116,8 @@ static const struct rb_pass_binding connect_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_CONNECT_LIGHT + 2, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_CONNECT_LIGHT + 3, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_CONNECT_EMIT_INFO, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_CONNECT_EMITTED + 0, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_CONNECT_EMITTED + 1, STORAGE_IMAGE),
 };
 _Static_assert(COUNT(connect_bindings) == RB_BIND_BDPT_CONNECT_COUNT, "connect bindings");
 
@@ -142,6 +144,8 @@ static const struct rb_pass_binding filter_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_FILTER_OUT + 1, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_FILTER_OUT + 2, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_FILTER_OUT + 3, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_FILTER_EMITTED + 0, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_FILTER_EMITTED + 1, STORAGE_IMAGE),
 };
 _Static_assert(COUNT(filter_bindings) == RB_BIND_BDPT_FILTER_COUNT, "filter bindings");
 
@@ -410,9 +414,8 @@ static uint32_t share(uint32_t limit, uint32_t s, uint32_t count)
     return limit > s ? (limit - s + count - 1) / count : 0;
 }
 
-void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
-                                 const struct rb_frame *frame, const struct rb_bdpt_frame *b,
-                                 uint32_t k)
+static void bind_connect(struct rb_pass_bdpt *p, VkCommandBuffer cmd, const struct rb_frame *frame,
+                         const struct rb_bdpt_frame *b)
 {
     struct rb_pass_bindings bind = {.pass = &p->connect};
     struct rb_gpu *gpu = p->connect.gpu;
@@ -435,7 +438,26 @@ void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     for (uint32_t i = 0; i < RB_BDPT_LIGHT_COUNT; i++)
         rb_pass_bind_image(&bind, RB_BIND_BDPT_CONNECT_LIGHT + i, b->accum[i].view, VK_NULL_HANDLE);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_CONNECT_EMIT_INFO, &b->emit_info);
+    for (uint32_t i = 0; i < RB_BDPT_EMITTED_COUNT; i++)
+        rb_pass_bind_image(&bind, RB_BIND_BDPT_CONNECT_EMITTED + i, b->emitted[i].view,
+                           VK_NULL_HANDLE);
     rb_pass_record_bindings(cmd, &bind);
+}
+
+/* The frame's counts of VPLs, bundles and the interleave, as connect's push has them. */
+static void frame_counts(const struct rb_bdpt_frame *b, float out[4])
+{
+    out[0] = b->min_roughness;
+    out[1] = (float)b->vpl_count;
+    out[2] = (float)b->bundle_count;
+    out[3] = (float)b->interleave;
+}
+
+void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                 const struct rb_frame *frame, const struct rb_bdpt_frame *b,
+                                 uint32_t k)
+{
+    bind_connect(p, cmd, frame, b);
     uint32_t n = b->interleave, count = n * n, s = k % count;
     uint32_t pairs = b->vpl_count < b->bundle_count ? b->vpl_count : b->bundle_count;
     struct rb_gpu_bdpt_connect_push pc = {
@@ -449,10 +471,29 @@ void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
         .bounce = {b->has_bounce && k < b->vpl_count ? b->vpl_count + k : RB_NONE,
                    b->has_chain && k < b->vpl_count ? 2 * b->vpl_count + k : RB_NONE,
                    b->bounce_vpl_size_px, 0},
-        .brdf = {b->min_roughness, 0.0f, 0.0f, 0.0f},
     };
+    frame_counts(b, pc.frame);
     push(cmd, &p->connect, &pc, sizeof(pc));
     vkCmdDispatch(cmd, groups(b->sub_width_px, 8), groups(b->sub_height_px, 8), 1);
+}
+
+void rb_pass_bdpt_emitters_direct_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                         const struct rb_frame *frame,
+                                         const struct rb_bdpt_frame *b)
+{
+    bind_connect(p, cmd, frame, b);
+    uint32_t n = b->interleave;
+    struct rb_gpu_bdpt_connect_push pc = {
+        .index = {0, 0, 0, (uint32_t)b->strategies},
+        .region = {0, 0, b->sub_width_px, b->sub_height_px},
+        .counts = {0.0f, 0.0f, 0.0f, b->clamp_g},
+        .params = {b->vpl_bias, (float)b->vpl_size_px, (float)b->bundle_size_px,
+                   (float)b->bundle.capacity_nodes},
+        .bounce = {RB_NONE, RB_NONE, b->bounce_vpl_size_px, 1},
+    };
+    frame_counts(b, pc.frame);
+    push(cmd, &p->connect, &pc, sizeof(pc));
+    vkCmdDispatch(cmd, groups(b->sub_width_px * n, 8), groups(b->sub_height_px * n, 8), 1);
 }
 
 void rb_pass_bdpt_gather_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
@@ -482,6 +523,9 @@ void rb_pass_bdpt_filter_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
         rb_pass_bind_image(&bind, RB_BIND_BDPT_FILTER_OUT + i, b->filtered[i].layer_views[b->slot],
                            VK_NULL_HANDLE);
     }
+    for (uint32_t i = 0; i < RB_BDPT_EMITTED_COUNT; i++)
+        rb_pass_bind_image(&bind, RB_BIND_BDPT_FILTER_EMITTED + i, b->emitted[i].view,
+                           VK_NULL_HANDLE);
     rb_pass_record_bindings(cmd, &bind);
     struct rb_gpu_bdpt_image_push pc = image_push(b);
     push(cmd, &p->filter, &pc, sizeof(pc));

@@ -373,6 +373,7 @@ struct rb_bdpt_frame {
     struct rb_gpu_image split[RB_BDPT_SPLIT_COUNT]; /* sub_* x n in size */
     struct rb_gpu_image accum[RB_BDPT_LIGHT_COUNT]; /* split order, added to by connect */
     struct rb_gpu_image gathered[RB_BDPT_LIGHT_COUNT];
+    struct rb_gpu_image emitted[RB_BDPT_EMITTED_COUNT]; /* image order: the emitters' points */
 
     /* The temporal caches (seed 000, section A): the filter writes the light of cache `slot`
      * (a layer of each array; the first one's alpha holds the depth), computed from `gbuffer`,
@@ -425,6 +426,11 @@ void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                  const struct rb_frame *frame, const struct rb_bdpt_frame *b,
                                  uint32_t k);
 /* b->accum back to image order, into b->gathered. */
+/* The emitters' dispatch of connect: every emitter point among the frame's VPLs at every pixel,
+ * into b->emitted. */
+void rb_pass_bdpt_emitters_direct_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
+                                         const struct rb_frame *frame,
+                                         const struct rb_bdpt_frame *b);
 void rb_pass_bdpt_gather_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                 const struct rb_frame *frame, const struct rb_bdpt_frame *b);
 /* The geometry-aware filter of b->gathered into cache b->slot of b->filtered. */

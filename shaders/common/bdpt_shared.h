@@ -104,8 +104,11 @@ struct rb_gpu_bdpt_connect_push {
     RB_VEC4(params);   /* VPL bias, VPL map size, bundle grid size, node capacity */
     RB_UVEC4(bounce);  /* x: the index of VPL k's bounce (K_v + k), or RB_NONE where the frame
                         * has none; y: its bounce's (2 K_v + k), or RB_NONE; z: the bounce
-                        * VPLs' map size (the corner of their layers they fill); w: unused */
-    RB_VEC4(brdf);     /* x: the least roughness of a VPL's or a bundle hit's BRDF; yzw: unused */
+                        * VPLs' map size (the corner of their layers they fill); w: 1 in the
+                        * emitters' dispatch (every emitter point at every pixel), 0 in an
+                        * iteration */
+    RB_VEC4(frame);    /* x: the least roughness of a VPL's or a bundle hit's BRDF; y: K_v, the
+                        * frame's VPLs; z: K_b, its bundles; w: n x n, its sub-images (floats) */
 };
 
 /* Push constants of bdpt_emitters.comp. */
@@ -224,5 +227,9 @@ RB_BDPT_FN float rb_bdpt_power(float n_s, float p_s, float n_o, float p_o)
 #define RB_BDPT_INDIRECT_DIFFUSE 2
 #define RB_BDPT_INDIRECT_SPECULAR 3
 #define RB_BDPT_LIGHT_COUNT 4
+
+/* The direct light of the emitters' points at every pixel (the emitters' dispatch of connect,
+ * in image order, added after the filter): diffuse and specular parts. */
+#define RB_BDPT_EMITTED_COUNT 2
 
 #endif

@@ -132,7 +132,8 @@
 #define RB_BIND_BDPT_CONNECT_ENV_MAP 15
 #define RB_BIND_BDPT_CONNECT_LIGHT 16 /* read and written: RB_BDPT_LIGHT_COUNT images */
 #define RB_BIND_BDPT_CONNECT_EMIT_INFO 20 /* rb_gpu_bdpt_emit_info */
-#define RB_BIND_BDPT_CONNECT_COUNT 21
+#define RB_BIND_BDPT_CONNECT_EMITTED 21 /* written by the emitters' dispatch: 2 images */
+#define RB_BIND_BDPT_CONNECT_COUNT 23
 
 /* bdpt_gather.comp: the sub-images' light back to the image */
 #define RB_BIND_BDPT_GATHER_IN 0  /* RB_BDPT_LIGHT_COUNT images */
@@ -144,7 +145,8 @@
 #define RB_BIND_BDPT_FILTER_GB_NORMAL 1
 #define RB_BIND_BDPT_FILTER_IN 2  /* RB_BDPT_LIGHT_COUNT images */
 #define RB_BIND_BDPT_FILTER_OUT 6 /* written: RB_BDPT_LIGHT_COUNT images */
-#define RB_BIND_BDPT_FILTER_COUNT 10
+#define RB_BIND_BDPT_FILTER_EMITTED 10 /* RB_BDPT_EMITTED_COUNT images */
+#define RB_BIND_BDPT_FILTER_COUNT 12
 
 /* reproject.vert and reproject.frag: each pixel's surface moved back to the caches' frames */
 #define RB_BIND_REPROJECT_GLOBALS 0
