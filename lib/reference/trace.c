@@ -242,9 +242,10 @@ static void nee_env(const struct rb_ref_world *w, const struct rb_ref_surface *s
     add_scaled(sk, f, le, power_heuristic(pdf, rb_ref_bsdf_pdf(b, l)) / pdf);
 }
 
-void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
-                         const float dir0[3], const struct rb_ref_rng *rng,
-                         struct rb_ref_sample_light *out, uint64_t *rays)
+/* rb_ref_trace_sample, or with is_direct_only rb_ref_trace_direct: the path stops at x1. */
+static void trace(const struct rb_ref_world *w, const struct rb_ref_hit *hit, const float dir0[3],
+                  const struct rb_ref_rng *rng, bool is_direct_only,
+                  struct rb_ref_sample_light *out, uint64_t *rays)
 {
     struct rb_ref_surface s;
     rb_ref_surface_eval(w, hit->prim, hit->u, hit->v, dir0, &s);
@@ -258,7 +259,7 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
     uint32_t bounces = w->max_bounces;
     bool has_area = w->paths != RB_PATHS_DIRECT && w->emitter_count > 0;
     bool has_env = w->paths != RB_PATHS_DIRECT && !w->env->is_black;
-    if (w->paths == RB_PATHS_DIRECT)
+    if (w->paths == RB_PATHS_DIRECT || is_direct_only)
         bounces = 0;
     else if (w->paths == RB_PATHS_BDPT && bounces > 2)
         bounces = 2;
@@ -341,6 +342,20 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
         dir[1] = l[1];
         dir[2] = l[2];
     }
+}
+
+void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
+                         const float dir[3], const struct rb_ref_rng *rng,
+                         struct rb_ref_sample_light *out, uint64_t *rays)
+{
+    trace(w, hit, dir, rng, false, out, rays);
+}
+
+void rb_ref_trace_direct(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
+                         const float dir[3], const struct rb_ref_rng *rng,
+                         struct rb_ref_sample_light *out, uint64_t *rays)
+{
+    trace(w, hit, dir, rng, true, out, rays);
 }
 
 /* One sample of the direct light at a point for the hybrid's bake: one emitter point chosen by
