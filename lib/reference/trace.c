@@ -213,7 +213,11 @@ static void nee_area(const struct rb_ref_world *w, const struct rb_ref_surface *
     rb_ref_offset(q, ne, q_off);
     if (occluded_toward(w, org, q_off, rays))
         return;
-    add_scaled(sk, f, le, power_heuristic(pdf, rb_ref_bsdf_pdf(b, l)) / pdf);
+    /* A blended emitter is a light no BSDF sample can hit (no ray hits blended triangles): its
+     * light samples are its only strategy. */
+    bool is_blended = w->mat_flags[w->tri_material[prim]] & RB_REF_MAT_BLEND;
+    float mis = is_blended ? 1.0f : power_heuristic(pdf, rb_ref_bsdf_pdf(b, l));
+    add_scaled(sk, f, le, mis / pdf);
 }
 
 /* The environment is at infinity: a shadow ray along l from anywhere near the surface aims at
