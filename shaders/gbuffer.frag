@@ -31,6 +31,8 @@ layout(location = 5) out vec4 o_motion;   // previous minus current pixel positi
 void main()
 {
     rb_gpu_material m = materials[i_material];
+    if (m.params.z < 0.0)
+        discard; // blended: the transparency pass draws it, after the deferred passes
     vec4 base = m.base_color;
     if (m.textures.x >= 0)
         base *= texture(srgb_textures, vec3(i_uv, float(m.textures.x)));

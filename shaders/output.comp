@@ -3,7 +3,9 @@
 // indirect_diffuse, indirect_specular, samples, tiles (with all of them, the RB_OUT_* layout).
 // The direct integrator has no indirect light: zero; bdpt's is textured and added here, its two
 // parts summed exactly into indirect. samples and tiles are the hybrid's stats image as its
-// diffuse filter wrote it, zero without one. Every value written that is NaN or infinite is
+// diffuse filter wrote it, zero without one. After the transparency pass, the blended layers'
+// light goes over the beauty and the direct layer (premultiplied), and the light behind them
+// passes scaled by their transmittance. Every value written that is NaN or infinite is
 // counted in `nonfinite` (an integer atomic add, so the count does not depend on the order).
 #version 460
 #extension GL_GOOGLE_include_directive : require
@@ -29,6 +31,7 @@ layout(binding = RB_BIND_OUTPUT_LIGHT + RB_BDPT_DIRECT_SPECULAR, rgba32f) unifor
 layout(binding = RB_BIND_OUTPUT_LIGHT + RB_BDPT_INDIRECT_DIFFUSE, rgba32f) uniform readonly image2D indirect_diffuse;
 layout(binding = RB_BIND_OUTPUT_LIGHT + RB_BDPT_INDIRECT_SPECULAR, rgba32f) uniform readonly image2D indirect_specular;
 layout(binding = RB_BIND_OUTPUT_STATS, rgba32f) uniform readonly image2D stats;
+layout(binding = RB_BIND_OUTPUT_TRANSPARENCY, rgba32f) uniform readonly image2D transparency;
 
 // The band of rows this dispatch writes: Out is bound from the band's first row, so indices
 // into it count from there (lib/passes/output.c splits frames larger than one binding may be).
@@ -42,6 +45,7 @@ layout(push_constant) uniform Band
     uint floats_per_pixel;
     uint has_light; // bdpt's gathered light is bound
     uint has_stats; // the hybrid's samples (rg) and tile masks (ba) are bound
+    uint has_transparency; // the transparency pass's light (rgb) and transmittance (a) are bound
 } band;
 
 uint bad = 0u;
@@ -90,11 +94,23 @@ void main()
         d += more;
         b.rgb += more + ind;
     }
+    float alpha = hit ? 1.0 : 0.0;
+    if (band.has_transparency != 0u) {
+        // Premultiplied over: the blended layers' light, plus what lies behind them times the
+        // fraction that passes. Their light is direct light; the indirect light behind passes.
+        vec4 t = imageLoad(transparency, ip);
+        b.rgb = t.rgb + t.a * b.rgb;
+        d = t.rgb + t.a * d;
+        ind_d *= t.a;
+        ind_s *= t.a;
+        ind = ind_d + ind_s;
+        alpha = 1.0 - t.a * (1.0 - alpha);
+    }
     uint base = (row * g.size.x + px.x) * band.floats_per_pixel;
     put(base + 0u, b.r);
     put(base + 1u, b.g);
     put(base + 2u, b.b);
-    put(base + 3u, hit ? 1.0 : 0.0);
+    put(base + 3u, alpha);
     uint at = base + 4u;
     layer(RB_LAYER_DIRECT, d, 3u, at);
     layer(RB_LAYER_INDIRECT, ind, 3u, at); // the direct integrator has none

@@ -7,6 +7,7 @@
 
 layout(std430, binding = RB_VIEW_BIND_VERTICES) readonly buffer Verts { rb_gpu_vertex verts[]; };
 layout(std430, binding = RB_VIEW_BIND_VIEWS) readonly buffer Views { rb_gpu_view views[]; };
+layout(std430, binding = RB_VIEW_BIND_MATERIALS) readonly buffer Materials { rb_gpu_material materials[]; };
 layout(push_constant) uniform Push { rb_gpu_view_push pc; };
 
 layout(location = 0) out vec3 o_pos;
@@ -23,4 +24,8 @@ void main()
     o_uv = v.uv.xy;
     o_material = floatBitsToUint(v.uv.z);
     gl_Position = views[pc.index.x].transform * vec4(p, 1.0);
+    // A blended material's triangle is in no view (no shadow, VPL, bundle or probe sees it):
+    // all its vertices at one point make it empty, whatever the projection after this stage.
+    if (materials[o_material].params.z < 0.0)
+        gl_Position = vec4(0.0, 0.0, 2.0, 1.0);
 }

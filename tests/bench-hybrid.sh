@@ -123,7 +123,7 @@ frame_times() {
             split("GBuffer|Direct Light|Transparency|Diffuse Rays|Specular Rays|" \
                   "Tracing, both lobes|Accumulation|Diffuse Filtering|Specular Filtering|" \
                   "Post Processing|other", label, "|")
-            split("animate gbuffer|shadow direct||diffuse_rays|specular_rays|" \
+            split("animate gbuffer|shadow direct|transparency|diffuse_rays|specular_rays|" \
                   "hiz ray_queue bvh_rays|accumulate tiles|diffuse_filter|specular_filter|" \
                   "output|", passes, "|")
             split("0.7|0.6|1.8|1.4|1.6|-|-|2.5|0.3|1.6|-", seed, "|")
@@ -136,7 +136,6 @@ frame_times() {
         { r = ($2 in row_of) ? row_of[$2] : rows; v[$1, r] += $3; has[$1, r] = 1
           if (r == rows && !(($2) in other)) { other[$2] = 1; others = others " " $2 } }
         END {
-            passes[3] = "none"
             passes[rows] = substr(others, 2)
             printf "  %-44s %6s", "row (passes)", "seed"
             for (s = 1; s <= n; s++) printf " %8s", "[" s "]"

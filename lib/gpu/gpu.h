@@ -346,6 +346,9 @@ struct rb_gpu_graphics_desc {
     VkCullModeFlags cull;
     bool has_depth_bias;
     bool is_depth_equal; /* test EQUAL and write no depth: the surfaces an earlier pass drew */
+    bool is_blend_over;  /* test LESS and write no depth; each fragment's premultiplied colour
+                          * goes over what is there, its alpha multiplies the destination's by
+                          * 1 - alpha (the transparency pass: rgb gathers, a transmits) */
     const char *debug_name;
 };
 enum rb_status rb_gpu_graphics_pipeline(struct rb_gpu *gpu, const struct rb_gpu_graphics_desc *d,

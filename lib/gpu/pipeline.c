@@ -241,12 +241,23 @@ enum rb_status rb_gpu_graphics_pipeline(struct rb_gpu *gpu, const struct rb_gpu_
     VkPipelineDepthStencilStateCreateInfo ds = {
         .sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO,
         .depthTestEnable = has_depth,
-        .depthWriteEnable = has_depth && !d->is_depth_equal,
+        .depthWriteEnable = has_depth && !d->is_depth_equal && !d->is_blend_over,
         .depthCompareOp = d->is_depth_equal ? VK_COMPARE_OP_EQUAL : VK_COMPARE_OP_LESS};
     VkPipelineColorBlendAttachmentState blend[8] = {{0}};
-    for (uint32_t i = 0; i < d->color_count && i < 8; i++)
+    for (uint32_t i = 0; i < d->color_count && i < 8; i++) {
         blend[i].colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
                                   VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+        if (d->is_blend_over) /* rgb' = src.rgb + (1 - src.a) rgb, a' = (1 - src.a) a */
+            blend[i] = (VkPipelineColorBlendAttachmentState){
+                .blendEnable = VK_TRUE,
+                .srcColorBlendFactor = VK_BLEND_FACTOR_ONE,
+                .dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
+                .colorBlendOp = VK_BLEND_OP_ADD,
+                .srcAlphaBlendFactor = VK_BLEND_FACTOR_ZERO,
+                .dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
+                .alphaBlendOp = VK_BLEND_OP_ADD,
+                .colorWriteMask = blend[i].colorWriteMask};
+    }
     VkPipelineColorBlendStateCreateInfo cb = {
         .sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO,
         .attachmentCount = d->color_count,

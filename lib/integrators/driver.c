@@ -172,6 +172,7 @@ static enum rb_status render_one(struct rb_integrator *it, int frame_index, bool
     rb_frame_write_slot(frame, it->scene, &it->cur, ctx.cur);
     rb_frame_write_globals(frame, it->job, frame_index, &it->cur, &it->prev, it->has_env_map);
     it->has_last = false; /* until this frame completes */
+    it->slot = ctx.cur;
     if ((it->ops->prepare && (st = it->ops->prepare(it, it->state, &ctx, err))) ||
         (st = rb_gpu_begin(gpu, err)))
         return st;

@@ -222,7 +222,9 @@ static enum rb_status upload_materials(struct rb_gpu *gpu, const struct rb_scene
         m[i].emissive[3] = s->normal_scale;
         m[i].params[0] = s->metallic;
         m[i].params[1] = s->roughness;
-        m[i].params[2] = s->alpha_mode == RB_ALPHA_MASK ? s->alpha_cutoff : 0.0f;
+        m[i].params[2] = s->alpha_mode == RB_ALPHA_MASK    ? s->alpha_cutoff
+                         : s->alpha_mode == RB_ALPHA_BLEND ? (float)RB_ALPHA_BLENDED
+                                                           : 0.0f;
         m[i].params[3] = s->specular_factor;
         m[i].specular_color[0] = s->specular_color[0];
         m[i].specular_color[1] = s->specular_color[1];
@@ -526,6 +528,33 @@ static enum rb_status check_limits(const struct rb_gpu *gpu, const struct rb_sce
     return st;
 }
 
+bool rb_frame_has_blended(const struct rb_scene *scene)
+{
+    for (uint32_t i = 0; i < scene->material_count; i++)
+        if (scene->materials[i].alpha_mode == RB_ALPHA_BLEND)
+            return true;
+    return false;
+}
+
+/* The transparency pass's target: blended as a colour attachment, read as a storage image by
+ * the output pass, in full float precision like the other light images. */
+static enum rb_status transparency_init(struct rb_gpu *gpu, struct rb_frame *frame,
+                                        struct rb_err *err)
+{
+    const VkFormat format = VK_FORMAT_R32G32B32A32_SFLOAT;
+    VkFormatProperties fp;
+    vkGetPhysicalDeviceFormatProperties(gpu->phys, format, &fp);
+    VkFormatFeatureFlags need =
+        VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT;
+    if ((fp.optimalTilingFeatures & need) != need)
+        return rb_errf(err, RB_E_UNSUPPORTED,
+                       "the device cannot blend into RGBA32F, which the transparency pass of "
+                       "the scene's blended materials needs");
+    return rb_frame_image(gpu, frame->width_px, frame->height_px, 1, format,
+                          VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT, false,
+                          "transparency", &frame->transparency, err);
+}
+
 enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc *desc,
                              const struct rb_moment *first, uint32_t slot_count,
                              struct rb_frame *frame, struct rb_err *err)
@@ -615,6 +644,8 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
         st = rb_frame_buffer(gpu, (VkDeviceSize)w * h * frame->readback_floats * sizeof(float),
                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                              false, "readback.device", &frame->readback_device, err);
+    if (st == RB_OK && rb_frame_has_blended(scene))
+        st = transparency_init(gpu, frame, err);
     if (st)
         return st;
     frame->beauty = &frame->direct;
@@ -630,6 +661,9 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
     for (size_t i = 0; i < sizeof(general) / sizeof(general[0]); i++)
         rb_gpu_image_barrier(gpu, cmd, general[i], VK_IMAGE_LAYOUT_UNDEFINED,
                              VK_IMAGE_LAYOUT_GENERAL);
+    if (frame->transparency.image)
+        rb_gpu_image_barrier(gpu, cmd, &frame->transparency, VK_IMAGE_LAYOUT_UNDEFINED,
+                             VK_IMAGE_LAYOUT_GENERAL);
     /* Defined contents for the slots a chunk's first warm-up frame reads as its past. */
     for (uint32_t s = 0; s < frame->slot_count; s++)
         vkCmdFillBuffer(cmd, frame->slots[s].vertices.buffer, 0, VK_WHOLE_SIZE, 0);
@@ -643,6 +677,7 @@ void rb_frame_release(struct rb_gpu *gpu, struct rb_frame *frame)
         return;
     rb_gpu_buffer_release(gpu, &frame->readback);
     rb_gpu_buffer_release(gpu, &frame->readback_device);
+    rb_gpu_image_release(gpu, &frame->transparency);
     rb_gpu_image_release(gpu, &frame->direct);
     rb_gpu_image_release(gpu, &frame->depth);
     for (int i = RB_GBUFFER_COLOR_COUNT - 1; i >= 0; i--)

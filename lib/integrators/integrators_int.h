@@ -81,6 +81,8 @@ struct rb_integrator {
     struct rb_pass_time *groups; /* the last frame's passes, grouped by name */
     uint32_t group_count, group_cap;
     struct rb_gpu_barriers barriers; /* what the passes did, from one frame to the next */
+    /* The slot of the frame being recorded (the transparency pass draws its vertices). */
+    const struct rb_frame_slot *slot;
 };
 
 /* Opens one timed pass of the frame and records the barriers it needs after the passes before
@@ -102,6 +104,10 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
                              const struct rb_moment *first, uint32_t slot_count,
                              struct rb_frame *frame, struct rb_err *err);
 void rb_frame_release(struct rb_gpu *gpu, struct rb_frame *frame);
+
+/* Whether a material of the scene is blended (glTF alphaMode BLEND): then the frame has a
+ * transparency image and the frame's passes end with the transparency pass. */
+bool rb_frame_has_blended(const struct rb_scene *scene);
 
 /* Evaluates animation, camera and lights at time_s. */
 enum rb_status rb_moment_evaluate(const struct rb_job *job, const struct rb_scene *scene,
@@ -134,6 +140,16 @@ struct rb_base {
     struct rb_pass_shadow *shadow;
     struct rb_pass_direct *direct;
     struct rb_pass_output *output;
+    /* The blended instances, with the scene's blended materials alone (else NULL and 0): the
+     * pass, and per instance its range of the frame's indices and the centre its order is
+     * sorted by (its primitive's bind-pose vertices' mean, in the node's space). */
+    struct rb_pass_transparency *transparency;
+    struct rb_transparency_draw *blend_draws; /* blend_count, in instance order */
+    uint32_t *blend_instances;                /* blend_count: each draw's instance */
+    float *blend_centres;                     /* 3 x blend_count */
+    struct rb_transparency_sort *blend_sort;  /* blend_count: scratch, per frame */
+    struct rb_transparency_draw *blend_order; /* blend_count: the frame's, back to front */
+    uint32_t blend_count;
 };
 
 enum rb_status rb_base_create(struct rb_integrator *it, struct rb_base *b, struct rb_err *err);
@@ -154,8 +170,10 @@ bool rb_base_record_direct(struct rb_integrator *it, struct rb_base *b, VkComman
  * tools that draw their own views of the frame's world vertices. */
 void rb_base_record_animate(struct rb_integrator *it, struct rb_pass_animate *pass,
                             VkCommandBuffer cmd, const struct rb_frame_slot *cur);
-/* Records output. light: NULL, or the RB_BDPT_LIGHT_COUNT images of gathered light; stats:
- * NULL, or the hybrid's samples and tile masks (rb_pass_output_record). */
+/* Records the transparency pass when the scene has blended instances (the pass "transparency":
+ * its instances back to front from this frame's camera; DESIGN.md "transparency"), then output.
+ * light: NULL, or the RB_BDPT_LIGHT_COUNT images of gathered light; stats: NULL, or the hybrid's
+ * samples and tile masks (rb_pass_output_record). */
 void rb_base_record_output(struct rb_integrator *it, struct rb_base *b, VkCommandBuffer cmd,
                            const struct rb_gpu_image *light, const struct rb_gpu_image *stats);
 

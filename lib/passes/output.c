@@ -3,7 +3,8 @@
  * NaN and infinite values it writes, so none reaches a file unnoticed. With bdpt's gathered
  * light, it textures that light with the diffuse and gray specular maps and adds it (seed 000,
  * B.1 "Output"); with the hybrid's sample counts and tile masks, it copies them into the samples
- * and tiles layers. */
+ * and tiles layers; after the transparency pass, it composites the frame under the blended
+ * layers' light (premultiplied: rgb + a x what lies behind). */
 #include "passes/passes_int.h"
 
 #include <stdlib.h>
@@ -21,7 +22,7 @@ struct rb_pass_output {
 struct band {
     uint32_t first_row, row_count;
     uint32_t layer_mask, floats_per_pixel;
-    uint32_t has_light, has_stats, pad[2];
+    uint32_t has_light, has_stats, has_transparency, pad;
 };
 
 static const struct rb_pass_binding bindings[] = {
@@ -40,6 +41,7 @@ static const struct rb_pass_binding bindings[] = {
     RB_PASS_BIND(RB_BIND_OUTPUT_LIGHT + 2, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_OUTPUT_LIGHT + 3, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_OUTPUT_STATS, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_OUTPUT_TRANSPARENCY, STORAGE_IMAGE),
 };
 _Static_assert(COUNT(bindings) == RB_BIND_OUTPUT_COUNT, "output bindings");
 
@@ -77,7 +79,8 @@ enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output *
 
 void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
                            const struct rb_frame *frame, const struct rb_gpu_buffer *target,
-                           const struct rb_gpu_image *light, const struct rb_gpu_image *stats)
+                           const struct rb_gpu_image *light, const struct rb_gpu_image *stats,
+                           bool has_transparency)
 {
     /* The count starts from zero on the device, ordered before the shader's atomic adds. */
     vkCmdFillBuffer(cmd, p->nonfinite.buffer, 0, VK_WHOLE_SIZE, 0);
@@ -100,7 +103,8 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
                             frame->readback_floats,
                             light != NULL,
                             stats != NULL,
-                            {0}};
+                            has_transparency,
+                            0};
         struct rb_pass_bindings b = {.pass = &p->pass};
         rb_pass_bind_buffer(&b, RB_BIND_OUTPUT_GLOBALS, &frame->globals);
         rb_pass_bind_image(&b, RB_BIND_OUTPUT_BEAUTY, frame->beauty->view, VK_NULL_HANDLE);
@@ -123,6 +127,9 @@ void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
                                light ? light[i].view : frame->direct.view, VK_NULL_HANDLE);
         rb_pass_bind_image(&b, RB_BIND_OUTPUT_STATS, stats ? stats->view : frame->direct.view,
                            VK_NULL_HANDLE); /* unread without stats */
+        rb_pass_bind_image(&b, RB_BIND_OUTPUT_TRANSPARENCY,
+                           has_transparency ? frame->transparency.view : frame->direct.view,
+                           VK_NULL_HANDLE); /* unread without the pass */
         rb_pass_record_bindings(cmd, &b);
         vkCmdPushConstants(cmd, p->pass.layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0,
                            sizeof(band), &band);

@@ -88,6 +88,10 @@ struct rb_frame {
                                                           * emission, motion */
     struct rb_gpu_image depth;
     struct rb_gpu_image direct;
+    /* The transparency pass's target (rb_pass_transparency_record): rgb the light the blended
+     * layers add, a the fraction of the light behind them that passes; no image (VK_NULL_HANDLE)
+     * when the scene has no blended material, and then no pass runs. */
+    struct rb_gpu_image transparency;
     const struct rb_gpu_image *beauty;    /* what the integrator composes; direct's own image for
                                            * the direct integrator */
     struct rb_gpu_buffer readback;        /* readback_floats per pixel, host-visible */
@@ -306,6 +310,26 @@ void rb_pass_direct_record(struct rb_pass_direct *p, VkCommandBuffer cmd,
                            const struct rb_frame *frame);
 void rb_pass_direct_destroy(struct rb_pass_direct *p);
 
+/* ---- transparency.c: blended materials, forward, after the deferred passes (seed 003) ------ */
+
+/* One blended instance's triangles: a range of frame->indices. */
+struct rb_transparency_draw {
+    uint32_t first_index, index_count;
+};
+
+struct rb_pass_transparency;
+/* format: frame->transparency's, which must support blending as a colour attachment. */
+enum rb_status rb_pass_transparency_create(struct rb_gpu *gpu, VkFormat format,
+                                           struct rb_pass_transparency **out, struct rb_err *err);
+/* Clears frame->transparency to (0, 0, 0, 1) and draws the ranges in the order given (the caller
+ * sorts them back to front) over cur's world vertices, depth-tested against frame->depth
+ * (unwritten), each fragment lit by frame's lights and shadow maps and blended over the ones
+ * before it (shaders/transparency.frag). */
+void rb_pass_transparency_record(struct rb_pass_transparency *p, VkCommandBuffer cmd,
+                                 const struct rb_frame *frame, const struct rb_frame_slot *cur,
+                                 const struct rb_transparency_draw *draws, uint32_t draw_count);
+void rb_pass_transparency_destroy(struct rb_pass_transparency *p);
+
 struct rb_pass_output;
 enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output **out,
                                      struct rb_err *err);
@@ -315,10 +339,14 @@ enum rb_status rb_pass_output_create(struct rb_gpu *gpu, struct rb_pass_output *
  * maps and adds: the direct part to the direct layer, the rest as the indirect layer, both to the
  * beauty. stats: NULL (the samples and tiles layers are zero), or the hybrid's per-pixel sample
  * counts (R diffuse, G specular) and tile masks (B diffuse, A specular), copied into those layers.
+ * has_transparency: the transparency pass ran this frame, and frame->transparency is composited
+ * over the beauty and the direct layer (the layers' light passes through it scaled by its
+ * alpha; the indirect layers take that scale alone; alpha covers what the layers cover).
  */
 void rb_pass_output_record(struct rb_pass_output *p, VkCommandBuffer cmd,
                            const struct rb_frame *frame, const struct rb_gpu_buffer *target,
-                           const struct rb_gpu_image *light, const struct rb_gpu_image *stats);
+                           const struct rb_gpu_image *light, const struct rb_gpu_image *stats,
+                           bool has_transparency);
 /* After the frame's submit has completed: how many floats the last record wrote to the readback
  * were NaN or infinite (0 for a clean frame). */
 uint32_t rb_pass_output_nonfinite_count(const struct rb_pass_output *p);

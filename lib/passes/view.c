@@ -294,8 +294,8 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
     struct writes w = {0};
     put_buffer(&w, RB_VIEW_BIND_VERTICES, &slot->vertices);
     put_buffer(&w, RB_VIEW_BIND_VIEWS, batch->views);
+    put_buffer(&w, RB_VIEW_BIND_MATERIALS, &frame->materials); /* view.vert drops blended ones */
     if (output != RB_VIEW_OUTPUT_DEPTH) {
-        put_buffer(&w, RB_VIEW_BIND_MATERIALS, &frame->materials);
         put_image(&w, RB_VIEW_BIND_SRGB_TEXTURES, frame->srgb_textures.view,
                   p->gpu->linear_sampler);
         put_image(&w, RB_VIEW_BIND_LINEAR_TEXTURES, frame->linear_textures.view,

@@ -32,9 +32,20 @@
  *   light sample and by each vertex's BSDF sample (MIS, as in FULL; the BSDF sample from x3
  *   counts an emitter it hits and goes no further); the environment at x1 only (light and BSDF
  *   samples, MIS) and on camera misses. With a black environment it is FULL with two bounces.
+ * - Blended materials (alphaMode BLEND) as the transparency pass draws them (lib/passes/
+ *   transparency.c): no ray hits them (the G-buffer and the shadow maps leave them out); each
+ *   sample of a camera ray composites the blended triangles in front of its first hit (the
+ *   RB_REF_MAX_LAYERS nearest, single-sided ones from the front), farthest first: the layer's
+ *   direct light (rb_ref_trace_direct: x1's light in the path space, no bounce) times its
+ *   alpha, over 1 - alpha times the light behind it, whose path goes on through it. In the
+ *   direct path space that is the direct integrator's transparency exactly (up to shadow maps
+ *   against exact visibility); in bdpt and full the layer also gets the emissive triangles'
+ *   and the environment's direct light, which bdpt's and the hybrid's layers do not.
  * - Layers: direct = emission at x1 + light reaching x1 after exactly one scattering + the
- *   environment on camera misses; indirect = the rest; beauty = direct + indirect, alpha 1 on a
- *   hit and 0 on a miss (averaged under box). indirect_diffuse and indirect_specular: indirect
+ *   environment on camera misses (the blended layers' light composited into it); indirect =
+ *   the rest (scaled by the layers' 1 - alpha); beauty = direct + indirect, alpha 1 on a hit
+ *   and 0 on a miss (averaged under box; with blended layers, what they and the hit cover).
+ *   indirect_diffuse and indirect_specular: indirect
  *   through x1's diffuse or specular lobe alone (x1's BSDF weight split by lobe), summed apart,
  *   so they add up to indirect up to rounding. AOVs from the first hit: albedo (c_diff),
  *   shading normal, view depth, motion (previous minus current pixel position of the same
@@ -94,6 +105,7 @@ struct rb_reference {
     uint32_t *tris; /* shared with Embree */
     uint32_t *tri_material;
     uint8_t *mat_flags;
+    bool has_blend; /* a material is blended (RB_REF_MAT_BLEND) */
     float srgb_lut[256];
 
     RTCDevice device;
@@ -117,6 +129,7 @@ struct rb_reference {
     float *pixels;
     double *accum;
     struct rb_ref_hit *primary;
+    uint8_t *layered;   /* per pixel: the centre ray crosses a blended layer */
     float *primary_dir; /* 3 per pixel */
 
     /* the frame being rendered */
@@ -194,6 +207,10 @@ static enum rb_status build_mesh(struct rb_reference *ref, struct rb_err *err)
             f |= RB_REF_MAT_SINGLE_SIDED;
         if (mat->emissive[0] > 0.0f || mat->emissive[1] > 0.0f || mat->emissive[2] > 0.0f)
             f |= RB_REF_MAT_EMISSIVE;
+        if (mat->alpha_mode == RB_ALPHA_BLEND) {
+            f |= RB_REF_MAT_BLEND;
+            ref->has_blend = true;
+        }
         ref->mat_flags[m] = f;
     }
 
@@ -243,12 +260,12 @@ static enum rb_status build_embree(struct rb_reference *ref, struct rb_err *err)
         return RB_OK;
     bool needs_filter = false;
     for (uint32_t m = 0; m < ref->scene->material_count; m++)
-        if (ref->mat_flags[m] & (RB_REF_MAT_MASKED | RB_REF_MAT_SINGLE_SIDED))
+        if (ref->mat_flags[m] & (RB_REF_MAT_MASKED | RB_REF_MAT_SINGLE_SIDED | RB_REF_MAT_BLEND))
             needs_filter = true;
     if (needs_filter &&
         !rtcGetDeviceProperty(ref->device, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED))
         return rb_errf(err, RB_E_UNSUPPORTED,
-                       "embree was built without filter functions, which alpha masks and "
+                       "embree was built without filter functions, which alpha masks, blending and "
                        "single-sided materials need");
     ref->rtc = rtcNewScene(ref->device);
     ref->geom = rtcNewGeometry(ref->device, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -342,8 +359,9 @@ enum rb_status rb_reference_create(const struct rb_reference_desc *desc, struct 
     ref->pixels = calloc(px * RB_OUT_FLOATS, sizeof(float));
     ref->accum = calloc(px * ACCUM, sizeof(double));
     ref->primary = calloc(px, sizeof(*ref->primary));
+    ref->layered = calloc(px, 1);
     ref->primary_dir = calloc(px * 3, sizeof(float));
-    if (!ref->pixels || !ref->accum || !ref->primary || !ref->primary_dir) {
+    if (!ref->pixels || !ref->accum || !ref->primary || !ref->primary_dir || !ref->layered) {
         st = rb_errf(err, RB_E_NOMEM, "out of memory for a %ux%u image", ref->width_px,
                      ref->height_px);
         goto fail;
@@ -368,6 +386,7 @@ void rb_reference_destroy(struct rb_reference *ref)
     rb_ref_env_release(&ref->env);
     free(ref->primary_dir);
     free(ref->primary);
+    free(ref->layered);
     free(ref->accum);
     free(ref->pixels);
     free(ref->lights);
@@ -540,6 +559,7 @@ static enum rb_status prepare_world(struct rb_reference *ref, int frame, double 
     struct rb_ref_world *w = &ref->world;
     w->scene = ref->scene;
     w->mat_flags = ref->mat_flags;
+    w->has_blend = ref->has_blend;
     w->srgb_lut = ref->srgb_lut;
     w->vertex_count = ref->vertex_count;
     w->tri_count = ref->tri_count;
@@ -604,6 +624,47 @@ static void camera_hit(const struct rb_reference *ref, const float dir[3], struc
     }
 }
 
+/* The blended layers a camera ray along dir crosses in front of its hit (the far plane on a
+ * miss), nearest first: their count into layers. */
+static uint32_t camera_layers(const struct rb_reference *ref, const float dir[3],
+                              const struct rb_ref_hit *hit, struct rb_ref_hit *layers)
+{
+    float cos_fwd = rb_f3_dot(dir, ref->cam_forward);
+    if (!ref->world.has_blend || !(cos_fwd > 0.0f))
+        return 0;
+    float org[3] = {ref->cam.position.x, ref->cam.position.y, ref->cam.position.z};
+    float tfar = hit->prim == RB_REF_NONE ? ref->cam.z_far / cos_fwd : hit->t;
+    return rb_ref_blend_layers(&ref->world, org, dir, ref->cam.z_near / cos_fwd, tfar, layers);
+}
+
+/* The transparency pass's composite, for one sample: the blended layers a camera ray along dir
+ * crosses before hit, farthest first, each over what lies behind it (premultiplied by its
+ * alpha, base colour factor x texture): its direct light is added to the direct layer, the
+ * light behind passes scaled by 1 - alpha (indirect and its lobes included); *coverage (1 on a
+ * hit, 0 on a miss) becomes the alpha the layers and the hit cover together. */
+static void composite_layers(const struct rb_reference *ref, const float dir[3],
+                             const struct rb_ref_hit *hit, const struct rb_ref_rng *rng,
+                             struct rb_ref_sample_light *light, double *coverage, uint64_t *rays)
+{
+    const struct rb_ref_world *w = &ref->world;
+    struct rb_ref_hit layers[RB_REF_MAX_LAYERS];
+    uint32_t n = camera_layers(ref, dir, hit, layers);
+    for (uint32_t k = n; k-- > 0;) {
+        float a = rb_clampf(rb_ref_alpha(w, layers[k].prim, layers[k].u, layers[k].v), 0, 1);
+        if (!(a > 0.0f))
+            continue; /* the transparency pass discards it */
+        struct rb_ref_sample_light ls = {0};
+        rb_ref_trace_direct(w, &layers[k], dir, rng, &ls, rays);
+        for (int c = 0; c < 3; c++) {
+            light->direct[c] = a * ls.direct[c] + (1.0f - a) * light->direct[c];
+            light->indirect[c] *= 1.0f - a;
+            for (int j = 0; j < RB_REF_LOBE_COUNT; j++)
+                light->indirect_lobe[j][c] *= 1.0f - a;
+        }
+        *coverage = a + (1.0 - a) * *coverage;
+    }
+}
+
 /* The camera ray through the centre of pixel (x, y), its first hit, and the AOVs (or the
  * environment on a miss). */
 static void primary_pixel(struct rb_reference *ref, const struct rb_mat4 *inv_vp, uint32_t x,
@@ -619,6 +680,8 @@ static void primary_pixel(struct rb_reference *ref, const struct rb_mat4 *inv_vp
     memset(o, 0, RB_OUT_FLOATS * sizeof(float));
     struct rb_ref_hit *hit = &ref->primary[i];
     camera_hit(ref, dir, hit, rays);
+    struct rb_ref_hit layers[RB_REF_MAX_LAYERS];
+    ref->layered[i] = camera_layers(ref, dir, hit, layers) > 0;
     if (hit->prim == RB_REF_NONE) {
         float env[3];
         rb_ref_env_eval(&ref->env, dir, env);
@@ -652,7 +715,7 @@ static void trace_pixel(struct rb_reference *ref, const struct rb_mat4 *inv_vp, 
     const struct rb_ref_world *w = &ref->world;
     size_t i = (size_t)y * ref->width_px + x;
     const struct rb_ref_hit *hit = &ref->primary[i];
-    if (!ref->use_box_filter && hit->prim == RB_REF_NONE)
+    if (!ref->use_box_filter && hit->prim == RB_REF_NONE && !ref->layered[i])
         return;
     double *acc = ref->accum + i * ACCUM;
     if (!ref->use_box_filter && w->paths == RB_PATHS_DIRECT && s0 > 0) {
@@ -677,15 +740,27 @@ static void trace_pixel(struct rb_reference *ref, const struct rb_mat4 *inv_vp, 
             camera_dir(ref, inv_vp, (float)x + u[0], (float)y + u[1], dir);
             struct rb_ref_hit h;
             camera_hit(ref, dir, &h, rays);
+            double coverage = 0.0;
             if (h.prim == RB_REF_NONE) {
                 rb_ref_env_eval(&ref->env, dir, light.direct);
             } else {
                 rb_ref_trace_sample(w, &h, dir, &rng, &light, rays);
-                acc[6] += 1.0;
+                coverage = 1.0;
             }
+            composite_layers(ref, dir, &h, &rng, &light, &coverage, rays);
+            acc[6] += coverage;
         } else {
-            rb_ref_trace_sample(w, hit, ref->primary_dir + i * 3, &rng, &light, rays);
-            acc[6] += 1.0;
+            const float *dir = ref->primary_dir + i * 3;
+            double coverage = 0.0;
+            if (hit->prim == RB_REF_NONE) {
+                rb_ref_env_eval(&ref->env, dir, light.direct);
+            } else {
+                rb_ref_trace_sample(w, hit, dir, &rng, &light, rays);
+                coverage = 1.0;
+            }
+            if (ref->layered[i])
+                composite_layers(ref, dir, hit, &rng, &light, &coverage, rays);
+            acc[6] += coverage;
         }
         float beauty[3];
         for (int c = 0; c < 3; c++) {
@@ -920,7 +995,7 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct r
 
     double inv = 1.0 / (double)done;
     for (size_t i = 0; i < px; i++) {
-        if (!ref->use_box_filter && ref->primary[i].prim == RB_REF_NONE)
+        if (!ref->use_box_filter && ref->primary[i].prim == RB_REF_NONE && !ref->layered[i])
             continue; /* the environment, written by the camera ray */
         const double *acc = ref->accum + i * ACCUM;
         float *o = ref->pixels + i * RB_OUT_FLOATS;
@@ -933,7 +1008,9 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct r
             o[RB_OUT_INDIRECT_SPECULAR + c] = (float)(acc[10 + c] * inv);
         }
         /* box: the fraction of the pixel's samples that hit a surface */
-        o[RB_OUT_BEAUTY + 3] = ref->use_box_filter ? (float)(acc[6] / (double)done) : 1.0f;
+        /* (with blended layers, what they and the hit cover together) */
+        o[RB_OUT_BEAUTY + 3] =
+            ref->use_box_filter || ref->layered[i] ? (float)(acc[6] / (double)done) : 1.0f;
         /* Every path may take either lobe, so both count every sample; no tile ever stops
          * sampling (tiles stays 0). */
         o[RB_OUT_SAMPLES + 0] = o[RB_OUT_SAMPLES + 1] = (float)done;

@@ -37,6 +37,7 @@ enum rb_ref_mat_flags {
     RB_REF_MAT_MASKED = 1 << 0,       /* alpha MASK with a cutoff > 0 */
     RB_REF_MAT_SINGLE_SIDED = 1 << 1, /* camera rays skip its back faces */
     RB_REF_MAT_EMISSIVE = 1 << 2,     /* a non-zero emissive factor */
+    RB_REF_MAT_BLEND = 1 << 3,        /* alpha BLEND: no ray hits it; camera rays gather it */
 };
 
 /* The environment: a uniform colour or an equirectangular map with its importance table. */
@@ -66,6 +67,7 @@ struct rb_ref_light {
 struct rb_ref_world {
     const struct rb_scene *scene;
     const uint8_t *mat_flags; /* per material, enum rb_ref_mat_flags */
+    bool has_blend;           /* a material has RB_REF_MAT_BLEND */
     const float *srgb_lut;    /* 256 entries: 8-bit sRGB to linear */
 
     uint32_t vertex_count, tri_count;
@@ -129,6 +131,10 @@ struct rb_ref_ray_ctx {
     struct RTCIntersectContext rtc;
     const struct rb_ref_world *world;
     bool is_camera; /* skip back faces of single-sided materials */
+    /* When set: the blended triangles the ray crosses, recorded (at most layer_cap, each once)
+     * rather than hit (rb_ref_blend_layers). */
+    struct rb_ref_hit *layers;
+    uint32_t layer_count, layer_cap;
 };
 
 /* The Embree filter for both intersect and occluded: alpha mask, camera back faces. */
@@ -143,6 +149,14 @@ void rb_ref_intersect(const struct rb_ref_world *w, bool is_camera, const float 
                       const float dir[3], float tnear, float tfar, struct rb_ref_hit *hit);
 bool rb_ref_occluded(const struct rb_ref_world *w, const float org[3], const float dir[3],
                      float tfar);
+
+/* The most blended layers a camera ray composites (nearest first; farther ones are dropped). */
+#define RB_REF_MAX_LAYERS 16
+/* The blended triangles a camera ray from org along dir crosses between tnear and tfar (front
+ * faces of single-sided materials alone), nearest first (ties by triangle): their count, at most
+ * RB_REF_MAX_LAYERS, into layers. */
+uint32_t rb_ref_blend_layers(const struct rb_ref_world *w, const float org[3], const float dir[3],
+                             float tnear, float tfar, struct rb_ref_hit *layers);
 
 /* Moves p off its surface along n (the side the new ray leaves by), scale-independently
  * (Wachter and Binder, "A Fast and Robust Method for Avoiding Self-Intersection", 2019). */
@@ -213,6 +227,13 @@ struct rb_ref_sample_light {
 /* One sample of one pixel whose camera ray (direction dir) hit hit: adds its light to out
  * (zeroed by the caller). */
 void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
+                         const float dir[3], const struct rb_ref_rng *rng,
+                         struct rb_ref_sample_light *out, uint64_t *rays);
+
+/* The direct light (into out->direct) of a blended surface that a camera ray along dir crosses
+ * at hit: as rb_ref_trace_sample with no bounce past it (emission, and the light of the path
+ * space's light sources after one scattering there). */
+void rb_ref_trace_direct(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
                          const float dir[3], const struct rb_ref_rng *rng,
                          struct rb_ref_sample_light *out, uint64_t *rays);
 

@@ -213,7 +213,11 @@ static void nee_area(const struct rb_ref_world *w, const struct rb_ref_surface *
     rb_ref_offset(q, ne, q_off);
     if (occluded_toward(w, org, q_off, rays))
         return;
-    add_scaled(sk, f, le, power_heuristic(pdf, rb_ref_bsdf_pdf(b, l)) / pdf);
+    /* A blended emitter is a light no BSDF sample can hit (no ray hits blended triangles): its
+     * light samples are its only strategy. */
+    bool is_blended = w->mat_flags[w->tri_material[prim]] & RB_REF_MAT_BLEND;
+    float mis = is_blended ? 1.0f : power_heuristic(pdf, rb_ref_bsdf_pdf(b, l));
+    add_scaled(sk, f, le, mis / pdf);
 }
 
 /* The environment is at infinity: a shadow ray along l from anywhere near the surface aims at
@@ -242,9 +246,10 @@ static void nee_env(const struct rb_ref_world *w, const struct rb_ref_surface *s
     add_scaled(sk, f, le, power_heuristic(pdf, rb_ref_bsdf_pdf(b, l)) / pdf);
 }
 
-void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
-                         const float dir0[3], const struct rb_ref_rng *rng,
-                         struct rb_ref_sample_light *out, uint64_t *rays)
+/* rb_ref_trace_sample, or with is_direct_only rb_ref_trace_direct: the path stops at x1. */
+static void trace(const struct rb_ref_world *w, const struct rb_ref_hit *hit, const float dir0[3],
+                  const struct rb_ref_rng *rng, bool is_direct_only,
+                  struct rb_ref_sample_light *out, uint64_t *rays)
 {
     struct rb_ref_surface s;
     rb_ref_surface_eval(w, hit->prim, hit->u, hit->v, dir0, &s);
@@ -258,7 +263,7 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
     uint32_t bounces = w->max_bounces;
     bool has_area = w->paths != RB_PATHS_DIRECT && w->emitter_count > 0;
     bool has_env = w->paths != RB_PATHS_DIRECT && !w->env->is_black;
-    if (w->paths == RB_PATHS_DIRECT)
+    if (w->paths == RB_PATHS_DIRECT || is_direct_only)
         bounces = 0;
     else if (w->paths == RB_PATHS_BDPT && bounces > 2)
         bounces = 2;
@@ -341,6 +346,20 @@ void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *
         dir[1] = l[1];
         dir[2] = l[2];
     }
+}
+
+void rb_ref_trace_sample(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
+                         const float dir[3], const struct rb_ref_rng *rng,
+                         struct rb_ref_sample_light *out, uint64_t *rays)
+{
+    trace(w, hit, dir, rng, false, out, rays);
+}
+
+void rb_ref_trace_direct(const struct rb_ref_world *w, const struct rb_ref_hit *hit,
+                         const float dir[3], const struct rb_ref_rng *rng,
+                         struct rb_ref_sample_light *out, uint64_t *rays)
+{
+    trace(w, hit, dir, rng, true, out, rays);
 }
 
 /* One sample of the direct light at a point for the hybrid's bake: one emitter point chosen by

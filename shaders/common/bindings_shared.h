@@ -51,7 +51,19 @@
 #define RB_BIND_OUTPUT_SPECULAR 9  /* the G-buffer's F0: the gray specular map */
 #define RB_BIND_OUTPUT_LIGHT 10    /* RB_BDPT_LIGHT_COUNT images: bdpt's gathered light */
 #define RB_BIND_OUTPUT_STATS 14    /* the hybrid's samples and tile masks (RB_BIND_HYBRID_STATS) */
-#define RB_BIND_OUTPUT_COUNT 15
+#define RB_BIND_OUTPUT_TRANSPARENCY 15 /* the transparency pass's light and transmittance */
+#define RB_BIND_OUTPUT_COUNT 16
+
+/* transparency.vert and transparency.frag: blended materials, lit as direct.comp lights a pixel */
+#define RB_BIND_TRANSPARENCY_GLOBALS 0
+#define RB_BIND_TRANSPARENCY_VERTICES 1
+#define RB_BIND_TRANSPARENCY_MATERIALS 2
+#define RB_BIND_TRANSPARENCY_SRGB_TEXTURES 3
+#define RB_BIND_TRANSPARENCY_LINEAR_TEXTURES 4
+#define RB_BIND_TRANSPARENCY_LIGHTS 5
+#define RB_BIND_TRANSPARENCY_SHADOW_VIEWS 6
+#define RB_BIND_TRANSPARENCY_SHADOW_MAPS 7
+#define RB_BIND_TRANSPARENCY_COUNT 8
 
 /* bdpt_bounds.comp: the bounding box of the points the G-buffer sees */
 #define RB_BIND_BDPT_BOUNDS_POSITION 0

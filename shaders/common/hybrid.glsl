@@ -57,11 +57,14 @@ layout(push_constant) uniform Push { rb_gpu_hybrid_push pc; };
 #include "punctual.glsl"
 
 // The BVH passes through the texels of an alpha-masked material under its cutoff, as the
-// G-buffer discards them and the reference's rays pass them.
+// G-buffer discards them and the reference's rays pass them, and through blended materials,
+// which are no occluders (the transparency pass draws them over the frame).
 bool rb_hybrid_bvh_filter(uint t, vec2 bary)
 {
     rb_gpu_vertex v0 = verts[indices[3u * t]];
     rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
+    if (m.params.z < 0.0)
+        return false;
     if (!(m.params.z > 0.0))
         return true;
     float a = m.base_color.a;

@@ -63,10 +63,16 @@ struct rb_gpu_instance {
 struct rb_gpu_material {
     RB_VEC4(base_color);
     RB_VEC4(emissive);       /* rgb; w = normal scale */
-    RB_VEC4(params);         /* metallic, roughness, alpha cutoff (0: opaque), specular factor */
+    RB_VEC4(params);         /* metallic, roughness, alpha cutoff (0: opaque; RB_ALPHA_BLENDED:
+                              * blended, drawn by the transparency pass alone), specular factor */
     RB_VEC4(specular_color); /* rgb; w = double-sided (0/1) */
     RB_IVEC4(textures);      /* base color, metallic-roughness, normal, emissive layer or -1 */
 };
+
+/* The alpha cutoff of a material with alphaMode BLEND: the deferred passes and every raster
+ * view leave its triangles out (they are no occluders for shadows or global illumination); the
+ * transparency pass draws them over the frame. */
+#define RB_ALPHA_BLENDED (-1.0)
 
 struct rb_gpu_light {
     RB_VEC4(position);  /* xyz; w = kind */
