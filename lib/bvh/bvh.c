@@ -204,9 +204,18 @@ static void embree_error(void *user, enum RTCError code, const char *str)
     }
 }
 
+/* Embree's progress monitor: false (stop) once the caller's cancel flag is set. */
+static bool progress(void *user, double done)
+{
+    (void)done;
+    const atomic_bool *cancel = user;
+    return !cancel || !atomic_load(cancel);
+}
+
 /* Builds prims (count of them) with Embree and flattens the tree into f. */
 static enum rb_status build_tree(struct flat *f, struct RTCBuildPrimitive *prims, size_t count,
-                                 uint32_t thread_count, struct rb_err *err)
+                                 uint32_t thread_count, const atomic_bool *cancel,
+                                 struct rb_err *err)
 {
     char config[64] = "";
     if (thread_count)
@@ -237,7 +246,13 @@ static enum rb_status build_tree(struct flat *f, struct RTCBuildPrimitive *prims
     args.setNodeChildren = set_children;
     args.setNodeBounds = set_bounds;
     args.createLeaf = create_leaf;
+    args.buildProgress = progress;
+    args.userPtr = (void *)cancel; /* read only, by progress */
     void *root = bvh ? rtcBuildBVH(&args) : NULL;
+    if (status.code == RTC_ERROR_CANCELLED || (cancel && atomic_load(cancel))) {
+        st = rb_errf(err, RB_E_INTERRUPTED, "embree: the BVH of %zu triangles: cancelled", count);
+        goto out;
+    }
     if (!root || status.code != RTC_ERROR_NONE) {
         st = rb_errf(err, RB_E_EXTERNAL, "embree: building the BVH of %zu triangles: %s (%d)",
                      count, status.code ? status.msg : "no tree", (int)status.code);
@@ -302,6 +317,8 @@ enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, 
                            "BVH: triangle %llu: index %u out of range (%u vertices)",
                            (unsigned long long)(i / 3), m->indices[i], m->vertex_count);
 
+    if (desc->cancel && atomic_load(desc->cancel))
+        return rb_errf(err, RB_E_INTERRUPTED, "BVH of %u triangles: cancelled", m->triangle_count);
     enum rb_status st = RB_OK;
     struct rb_bvh bvh = {.object_count = object_count};
     struct pick *picks = calloc(object_count ? object_count : 1, sizeof(*picks));
@@ -406,7 +423,7 @@ enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, 
         f.node_count = 1;
         set_word(&f.nodes[0].box0_max[3], RB_BVH_LEAF_BIT);
         set_word(&f.nodes[0].box1_max[3], RB_BVH_LEAF_BIT);
-    } else if ((st = build_tree(&f, prims, n, desc->thread_count, err))) {
+    } else if ((st = build_tree(&f, prims, n, desc->thread_count, desc->cancel, err))) {
         goto out;
     }
     if (f.tri_count != n)

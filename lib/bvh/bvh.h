@@ -6,6 +6,8 @@
 #ifndef RB_BVH_BVH_H
 #define RB_BVH_BVH_H
 
+#include <stdatomic.h>
+
 #include "core/core.h"
 
 #include "bvh_shared.h" /* shaders/common, on the include path */
@@ -37,9 +39,11 @@ struct rb_bvh_desc {
     const struct rb_bvh_mesh *mesh;
     const struct rb_bvh_object *objects; /* NULL with object_count 0: the whole mesh, one object */
     uint32_t object_count;
-    uint64_t triangle_budget; /* the most triangles the BVH holds; 0: every object */
-    uint32_t thread_count;    /* Embree's build threads; 0: one per core. The output is the same
-                               * whatever the count. */
+    uint64_t triangle_budget;  /* the most triangles the BVH holds; 0: every object */
+    uint32_t thread_count;     /* Embree's build threads; 0: one per core. The output is the same
+                                * whatever the count. */
+    const atomic_bool *cancel; /* NULL, or a flag another thread may set: once it is true the
+                                * build stops early with RB_E_INTERRUPTED */
 };
 
 /* What rb_bvh_build makes: the two arrays of bvh_shared.h, ready to upload. */
@@ -65,8 +69,9 @@ struct rb_bvh {
  * finite) are left out and not counted against the budget. No triangles gives a valid BVH that
  * nothing hits. The result depends only on the input, not on Embree's threads or scheduling.
  * *out (released with rb_bvh_release) is written only on success. Fails with RB_E_INVALID for
- * an object or index out of range, RB_E_NOMEM, or RB_E_EXTERNAL when Embree fails (its error
- * named). Thread-safe: each call has its own Embree device. */
+ * an object or index out of range, RB_E_NOMEM, RB_E_EXTERNAL when Embree fails (its error
+ * named), or RB_E_INTERRUPTED once *desc->cancel is true. Thread-safe: each call has its own
+ * Embree device. */
 enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, struct rb_err *err);
 
 /* Frees what rb_bvh_build allocated and zeroes *bvh; accepts a zeroed struct. */

@@ -468,6 +468,36 @@ static void test_threads(void **state)
     free(pos);
 }
 
+/* The hybrid's thread cancels a build it no longer wants: a set flag stops it with
+ * RB_E_INTERRUPTED and *out untouched; a clear one changes nothing. */
+static void test_cancel(void **state)
+{
+    (void)state;
+    float *pos;
+    uint32_t *idx;
+    struct rb_bvh_mesh m = grid_mesh(120, 0, &pos, &idx);
+    atomic_bool cancel;
+    atomic_init(&cancel, true);
+    struct rb_bvh out = {.node_count = 12345}, plain, flagged;
+    struct rb_err err = RB_ERR_INIT;
+    assert_int_equal(rb_bvh_build(&(struct rb_bvh_desc){.mesh = &m, .cancel = &cancel}, &out, &err),
+                     RB_E_INTERRUPTED);
+    print_message("# a set flag: %s\n", err.msg);
+    assert_non_null(strstr(err.msg, "cancelled"));
+    assert_int_equal(out.node_count, 12345);
+    atomic_store(&cancel, false);
+    build(&(struct rb_bvh_desc){.mesh = &m}, &plain);
+    build(&(struct rb_bvh_desc){.mesh = &m, .cancel = &cancel}, &flagged);
+    assert_int_equal(plain.node_count, flagged.node_count);
+    assert_memory_equal(plain.nodes, flagged.nodes, plain.node_count * sizeof(*plain.nodes));
+    assert_memory_equal(plain.triangles, flagged.triangles,
+                        plain.triangle_count * sizeof(*plain.triangles));
+    rb_bvh_release(&plain);
+    rb_bvh_release(&flagged);
+    free(idx);
+    free(pos);
+}
+
 /* ---- against Embree on the shared scenes --------------------------------------------------- */
 
 /* One scene's world triangles at time 0, laid out as frame.c lays them out. */
@@ -825,6 +855,7 @@ int main(void)
         cmocka_unit_test(test_budget),
         cmocka_unit_test(test_lod),
         cmocka_unit_test(test_threads),
+        cmocka_unit_test(test_cancel),
         cmocka_unit_test(test_threads_scene),
         cmocka_unit_test(test_scenes_against_embree),
     };
