@@ -19,7 +19,8 @@
  *
  * The BVH's schedule (seed 003: "async BVH construction"). Frame f traces the BVH of the pose of
  * its epoch e(f), the last frame at or before f that is a multiple of bvh_interval after
- * sequence_start, whatever frame the run began at and however long anything took. The build
+ * sequence_start, whatever frame the run began at and however long anything took; its objects
+ * are chosen as seen from e(f)'s camera (rb_bvh_select's relevance). The build
  * and the bake run on a worker thread, ahead of time: as soon as the prepare of e's first frame
  * has uploaded e's BVH, the thread starts on e + bvh_interval's (the animation is a function of
  * time, so a later pose is known now; none past the run's last frame) while the main thread
@@ -64,6 +65,7 @@ struct bvh_worker {
     bool is_quitting;     /* under lock */
     atomic_bool cancel;   /* stop the posted build early: its result is dropped */
     int64_t epoch;        /* the frame whose pose the posted job builds (the main thread's) */
+    float eye[3];         /* the camera's position at that frame (the BVH's relevance) */
     /* the result */
     enum rb_status st;
     struct rb_err err;
@@ -91,6 +93,10 @@ struct hybrid {
     struct rb_bvh_object *objects;
     uint32_t object_count;
     struct rb_scene_pose *bvh_pose;
+    struct rb_scene_pose *eye_pose; /* the main thread's, for the camera of an epoch */
+    uint8_t *choice, *built_choice; /* the worker's: rb_bvh_select's, and the device BVH's */
+    uint8_t *logged_choice;         /* the main thread's: the last selection logged */
+    bool has_logged_choice;
     uint32_t node_capacity, tri_capacity;
     bool has_bvh;      /* the device holds a BVH (the main thread's) */
     int64_t bvh_epoch; /* the frame whose pose it holds */
@@ -148,6 +154,10 @@ static void destroy(struct rb_integrator *it, void *state)
     rb_pass_hybrid_destroy(d->passes);
     rb_base_destroy(&d->base);
     rb_scene_pose_destroy(d->bvh_pose);
+    rb_scene_pose_destroy(d->eye_pose);
+    free(d->choice);
+    free(d->built_choice);
+    free(d->logged_choice);
     rb_reference_destroy(d->ref);
     free(d->bake_points);
     free(d->bake_rgb);
@@ -214,7 +224,11 @@ static enum rb_status geometry_init(struct rb_integrator *it, struct hybrid *d, 
     d->positions = malloc(((size_t)it->frame.vertex_count + 1) * 6 * sizeof(float));
     d->built = malloc(((size_t)it->frame.vertex_count + 1) * 6 * sizeof(float));
     d->objects = malloc(((size_t)pose->instance_count + 1) * sizeof(*d->objects));
-    if (!d->indices || !d->positions || !d->built || !d->objects)
+    d->choice = calloc((size_t)pose->instance_count + 1, 1);
+    d->built_choice = calloc((size_t)pose->instance_count + 1, 1);
+    d->logged_choice = calloc((size_t)pose->instance_count + 1, 1);
+    if (!d->indices || !d->positions || !d->built || !d->objects || !d->choice ||
+        !d->built_choice || !d->logged_choice)
         return rb_errf(err, RB_E_NOMEM, "out of memory for the BVH's %llu triangles",
                        (unsigned long long)(icount / 3));
     d->triangle_count = (uint32_t)(icount / 3);
@@ -226,6 +240,8 @@ static enum rb_status geometry_init(struct rb_integrator *it, struct hybrid *d, 
     }
     d->object_count = pose->instance_count;
     enum rb_status st = rb_scene_pose_create(scene, &d->bvh_pose, err);
+    if (st == RB_OK)
+        st = rb_scene_pose_create(scene, &d->eye_pose, err);
     if (st || !d->settings->bvh_lod)
         return st;
     return lod_init(it, d, err);
@@ -604,29 +620,39 @@ static enum rb_status build_bvh(struct rb_integrator *it, struct hybrid *d, int6
     size_t v = it->frame.vertex_count;
     rb_scene_deform(it->scene, d->bvh_pose, d->positions, 3, d->ref ? d->positions + v * 3 : NULL,
                     NULL, NULL);
-    /* The build is a function of the vertices alone (the triangles, objects and budget do not
-     * change), the bake of their positions and normals: a pose that did not move them keeps the
-     * BVH the device has. */
-    size_t bytes = v * (d->ref ? 6 : 3) * sizeof(float);
-    if (d->has_built && memcmp(d->positions, d->built, bytes) == 0) {
-        w->is_same = true;
-        return RB_OK;
-    }
     const struct rb_bvh_mesh mesh = {.positions = d->positions,
                                      .stride_floats = 3,
                                      .vertex_count = it->frame.vertex_count,
                                      .indices = d->indices,
                                      .triangle_count = (uint32_t)all_triangles(d)};
+    const struct rb_bvh_desc desc = {
+        .mesh = &mesh,
+        .objects = d->objects,
+        .object_count = d->object_count,
+        .triangle_budget = d->settings->bvh_triangles,
+        .score = d->settings->bvh_select == RB_BVH_SELECT_AREA ? RB_BVH_SCORE_AREA
+                                                               : RB_BVH_SCORE_RELEVANCE,
+        .eye = {w->eye[0], w->eye[1], w->eye[2]},
+        .thread_count = 0,
+        .cancel = &w->cancel,
+    };
+    /* The build is a function of the vertices and of the objects chosen (the triangles, objects
+     * and budget do not change), the bake of their positions and normals: a pose that did not
+     * move them, seen from where the same objects are chosen, keeps the BVH the device has. */
+    enum rb_status st = rb_bvh_select(&desc, d->choice, err);
+    if (st) {
+        rb_err_prefix(err, "hybrid: the BVH of frame %lld", (long long)epoch);
+        return st;
+    }
+    size_t bytes = v * (d->ref ? 6 : 3) * sizeof(float);
+    if (d->has_built && memcmp(d->positions, d->built, bytes) == 0 &&
+        memcmp(d->choice, d->built_choice, d->object_count) == 0) {
+        w->is_same = true;
+        return RB_OK;
+    }
     double start = rb_monotonic_s();
     struct rb_bvh *bvh = &w->bvh;
-    enum rb_status st =
-        rb_bvh_build(&(struct rb_bvh_desc){.mesh = &mesh,
-                                           .objects = d->objects,
-                                           .object_count = d->object_count,
-                                           .triangle_budget = d->settings->bvh_triangles,
-                                           .thread_count = 0,
-                                           .cancel = &w->cancel},
-                     bvh, err);
+    st = rb_bvh_build(&desc, bvh, err);
     if (st) {
         rb_err_prefix(err, "hybrid: the BVH of frame %lld", (long long)epoch);
         return st;
@@ -645,6 +671,7 @@ static enum rb_status build_bvh(struct rb_integrator *it, struct hybrid *d, int6
         return st;
     }
     d->has_built = true;
+    memcpy(d->built_choice, bvh->choice, d->object_count);
     float *t = d->built;
     d->built = d->positions;
     d->positions = t;
@@ -676,12 +703,15 @@ static void *bvh_main(void *arg)
 }
 
 /* The main thread's side of the worker: post a job (none posted), wait for its result. */
-static void worker_post(struct bvh_worker *w, int64_t epoch)
+static void worker_post(struct bvh_worker *w, int64_t epoch, const struct rb_camera *cam)
 {
     pthread_mutex_lock(&w->lock);
     if (w->state != BVH_IDLE)
         RB_BUG("a second BVH job posted before the first was taken");
     w->epoch = epoch;
+    w->eye[0] = cam->position.x;
+    w->eye[1] = cam->position.y;
+    w->eye[2] = cam->position.z;
     w->st = RB_OK;
     w->is_same = false;
     w->bake_count = 0;
@@ -701,6 +731,27 @@ static bool worker_take(struct bvh_worker *w)
     w->state = BVH_IDLE;
     pthread_mutex_unlock(&w->lock);
     return was_posted;
+}
+
+/* Logs (debug) what the BVH of frame epoch holds of each object, when that changed. */
+static void log_choice(struct hybrid *d, const struct rb_bvh *bvh, int64_t epoch)
+{
+    if (d->has_logged_choice && memcmp(d->logged_choice, bvh->choice, d->object_count) == 0)
+        return;
+    static const char *const what[] = {"left out", "whole", "coarser"};
+    const struct rb_scene *scene = d->it->scene;
+    const struct rb_scene_pose *pose = d->it->cur.pose;
+    for (uint32_t i = 0; i < d->object_count; i++) {
+        const struct rb_bvh_object *o = &d->objects[i];
+        uint8_t c = bvh->choice[i];
+        const char *name = scene->nodes[pose->instances[i].node].name;
+        rb_log(RB_LOG_DEBUG,
+               "hybrid: the BVH of frame %lld: object %u (node '%s'): %s, %u triangles",
+               (long long)epoch, i, name ? name : "", what[c < 3 ? c : 0],
+               c == RB_BVH_COARSER ? o->lod_count : o->triangle_count);
+    }
+    memcpy(d->logged_choice, bvh->choice, d->object_count);
+    d->has_logged_choice = true;
 }
 
 /* Uploads the worker's result as the BVH of frame epoch (the main thread, the worker idle). */
@@ -725,12 +776,23 @@ static void upload(struct hybrid *d, int64_t epoch, double wait_ms)
                bvh->objects_included, bvh->object_count, bvh->triangle_count,
                bvh->objects_simplified, (unsigned long long)bvh->triangles_left_out,
                d->settings->bvh_triangles);
+    log_choice(d, bvh, epoch);
     rb_log(RB_LOG_DEBUG,
            "hybrid: the BVH of frame %lld: built in %.1f ms and baked in %.1f ms on its thread, "
            "%.1f ms of it waited for",
            (long long)epoch, w->build_ms, w->bake_ms, wait_ms);
     d->has_bvh = true;
     rb_bvh_release(bvh);
+}
+
+/* The camera at frame epoch, whose position the BVH's relevance is seen from (the main thread:
+ * the camera's evaluation may log). */
+static enum rb_status epoch_camera(struct rb_integrator *it, struct hybrid *d, int64_t epoch,
+                                   struct rb_camera *cam, struct rb_err *err)
+{
+    double t = (double)epoch / it->job->rate_fps;
+    rb_scene_evaluate(it->scene, &it->sel, t, d->eye_pose);
+    return rb_camera_evaluate(it->job, it->scene, &it->setup, d->eye_pose, t, cam, err);
 }
 
 /* The schedule of the file comment: the BVH of frame f's epoch, from the worker, and the next
@@ -763,8 +825,13 @@ static enum rb_status prepare(struct rb_integrator *it, void *state, const struc
                "frame %lld's",
                (long long)w->epoch, ctx->frame, (long long)epoch);
     }
-    if (!is_posted)
-        worker_post(w, epoch);
+    struct rb_camera cam;
+    enum rb_status st;
+    if (!is_posted) {
+        if ((st = epoch_camera(it, d, epoch, &cam, err)))
+            return st;
+        worker_post(w, epoch, &cam);
+    }
     worker_take(w);
     if (w->st) {
         rb_bvh_release(&w->bvh);
@@ -775,8 +842,11 @@ static enum rb_status prepare(struct rb_integrator *it, void *state, const struc
     /* The next epoch's, while this frame and the ones before it run; none past the run's last
      * frame. */
     int64_t next = epoch + d->settings->bvh_interval;
-    if (it->job->frame_end < 0 || next <= it->job->frame_end)
-        worker_post(w, next);
+    if (it->job->frame_end < 0 || next <= it->job->frame_end) {
+        if ((st = epoch_camera(it, d, next, &cam, err)))
+            return st;
+        worker_post(w, next, &cam);
+    }
     return RB_OK;
 }
 
