@@ -450,6 +450,15 @@ enum rb_status rb_bvh_select(const struct rb_bvh_desc *desc, uint8_t *choice, st
     enum rb_status st = check_desc(desc, &whole, &objects, &object_count, err);
     if (st)
         return st;
+    /* Every object fits, degenerate triangles and all: every object whole, as choose would
+     * find (the common case, without an area computed). */
+    uint64_t all = 0;
+    for (uint32_t i = 0; i < object_count; i++)
+        all += objects[i].triangle_count;
+    if (!desc->triangle_budget || all <= desc->triangle_budget) {
+        memset(choice, RB_BVH_WHOLE, object_count);
+        return RB_OK;
+    }
     struct pick *picks = calloc(object_count ? object_count : 1, sizeof(*picks));
     if (!picks)
         return rb_errf(err, RB_E_NOMEM, "BVH: out of memory for %u objects", object_count);

@@ -437,7 +437,8 @@ static void test_relevance(void **state)
         /* both over their share: both coarser; what is left (2) cannot make one whole (3) */
         {RB_BVH_SCORE_RELEVANCE, 2, 4, {C, C}},
         {RB_BVH_SCORE_RELEVANCE, 102, 1, {O, C}},
-        {RB_BVH_SCORE_RELEVANCE, 2, 8, {W, W}}, /* everything fits: everything whole */
+        {RB_BVH_SCORE_RELEVANCE, 2, 8, {W, W}},   /* everything fits: everything whole */
+        {RB_BVH_SCORE_RELEVANCE, 102, 0, {W, W}}, /* no budget */
         {RB_BVH_SCORE_AREA, 102, 6, {W, C}},
         {RB_BVH_SCORE_AREA, 102, 4, {W, O}},
         {RB_BVH_SCORE_AREA, 102, 1, {C, O}},
