@@ -13,6 +13,8 @@
 #     the indirect layer and of the beauty after 1, 8 and 64 frames (frames 0, 7, 63) against
 #     the reference with one bounce (max_bounces=1) at 4096 spp, with the default rays (1 a lobe,
 #     64 samples a pixel) and with 4 rays a lobe (256); the reference's own noise is said.
+#  5. The moving demo's (jobs/demo-hybrid.yaml) frame wall time over its GPU passes' sum,
+#     medians over frames 4-11: what the BVH's thread leaves on the frame's critical path.
 # Sizes are small so that this takes about 4 minutes on two shared cores.
 #
 #   BUILD=build sh tests/bench-hybrid.sh
@@ -224,6 +226,26 @@ for run in default:1:64 4-rays:4:256; do
             rays, (rays > 1 ? "s" : ""), spp, $1, ($1 > 1 ? "s" : " "), $2, $3, $4 }
         END { printf "  %d ray%s a lobe: frame wall median %.1f ms\n", rays, (rays > 1 ? "s" : ""), w }'
 done
+
+# ---- wall against GPU on the moving demo --------------------------------------------------
+
+# jobs/demo-hybrid.yaml as it is: camera and animation moving, so a BVH is built and baked every
+# frame, on the BVH's thread while the frames before it render. The frame's wall time over the
+# sum of its GPU passes, medians over frames 4-11 (frames 0-3 build the first BVH and compile the
+# shaders). On a CPU device (lavapipe) the thread and the "GPU" share the cores, so its work
+# shows in the GPU passes' times too.
+if [ "${RB_BENCH_QUICK:-0}" = 1 ]; then
+    m_size=32x18 m_first=1 m_last=2
+else
+    m_size=640x360 m_first=4 m_last=11
+fi
+render jobs/demo-hybrid.yaml "$out/moving" --size "$m_size" --frames "0-$m_last"
+m_frames=$(seq "$m_first" "$m_last" | while read -r f; do printf '%s ' "$out/moving/frame.$(printf %04d "$f").timing.json"; done)
+# shellcheck disable=SC2086 # the sidecars' paths, without spaces
+m_wall=$(field wall_ms $m_frames | median) m_gpu=$(field gpu_total_ms $m_frames | median)
+awk -v w="$m_wall" -v g="$m_gpu" -v size="$m_size" -v a="$m_first" -v b="$m_last" 'BEGIN {
+    printf "hybrid moving demo (jobs/demo-hybrid.yaml) at %s, medians over frames %d-%d: frame wall %.1f ms, GPU passes %.1f ms, wall / GPU %.2f\n",
+        size, a, b, w, g, w / g }'
 
 awk -v s="$start" -v e="$(date +%s)" -v l0="$load" -v l1="$(cut -d' ' -f1 /proc/loadavg)" \
     -v cpus="$(nproc)" 'BEGIN { printf "hybrid bench took %.1f min; load average %s at the start, %s at the end, on %d cores\n",

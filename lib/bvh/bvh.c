@@ -100,10 +100,11 @@ static double double_area(const struct rb_bvh_mesh *m, uint32_t t)
     return sqrt(x * x + y * y + z * z);
 }
 
-/* Per object while choosing: its usable triangles, its area, whether it is in. */
+/* Per object while choosing: its usable triangles (whole and coarser), its relevance and
+ * score, whether it is in and by which version. */
 struct pick {
     uint32_t object, valid, lod_valid;
-    double score;
+    double relevance, score;
     bool is_included, is_lod;
 };
 
@@ -204,9 +205,18 @@ static void embree_error(void *user, enum RTCError code, const char *str)
     }
 }
 
+/* Embree's progress monitor: false (stop) once the caller's cancel flag is set. */
+static bool progress(void *user, double done)
+{
+    (void)done;
+    const atomic_bool *cancel = user;
+    return !cancel || !atomic_load(cancel);
+}
+
 /* Builds prims (count of them) with Embree and flattens the tree into f. */
 static enum rb_status build_tree(struct flat *f, struct RTCBuildPrimitive *prims, size_t count,
-                                 uint32_t thread_count, struct rb_err *err)
+                                 uint32_t thread_count, const atomic_bool *cancel,
+                                 struct rb_err *err)
 {
     char config[64] = "";
     if (thread_count)
@@ -237,7 +247,13 @@ static enum rb_status build_tree(struct flat *f, struct RTCBuildPrimitive *prims
     args.setNodeChildren = set_children;
     args.setNodeBounds = set_bounds;
     args.createLeaf = create_leaf;
+    args.buildProgress = progress;
+    args.userPtr = (void *)cancel; /* read only, by progress */
     void *root = bvh ? rtcBuildBVH(&args) : NULL;
+    if (status.code == RTC_ERROR_CANCELLED || (cancel && atomic_load(cancel))) {
+        st = rb_errf(err, RB_E_INTERRUPTED, "embree: the BVH of %zu triangles: cancelled", count);
+        goto out;
+    }
     if (!root || status.code != RTC_ERROR_NONE) {
         st = rb_errf(err, RB_E_EXTERNAL, "embree: building the BVH of %zu triangles: %s (%d)",
                      count, status.code ? status.msg : "no tree", (int)status.code);
@@ -278,82 +294,199 @@ out:
     return st;
 }
 
-enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, struct rb_err *err)
+/* The objects of desc (the whole mesh as one when it has none), or an error for bad input. */
+static enum rb_status check_desc(const struct rb_bvh_desc *desc, struct rb_bvh_object *whole,
+                                 const struct rb_bvh_object **objects, uint32_t *object_count,
+                                 struct rb_err *err)
 {
     const struct rb_bvh_mesh *m = desc->mesh;
     if (!m || (m->triangle_count && (!m->positions || !m->indices)) || m->stride_floats < 3)
         return rb_errf(err, RB_E_INVALID, "BVH: no mesh, or a stride under 3 floats");
-    struct rb_bvh_object whole = {.first_triangle = 0, .triangle_count = m->triangle_count};
-    const struct rb_bvh_object *objects = desc->objects ? desc->objects : &whole;
-    uint32_t object_count = desc->objects ? desc->object_count : 1;
-    for (uint32_t i = 0; i < object_count; i++)
-        if ((uint64_t)objects[i].first_triangle + objects[i].triangle_count > m->triangle_count ||
-            (uint64_t)objects[i].lod_first + objects[i].lod_count > m->triangle_count)
+    *whole = (struct rb_bvh_object){.first_triangle = 0, .triangle_count = m->triangle_count};
+    *objects = desc->objects ? desc->objects : whole;
+    *object_count = desc->objects ? desc->object_count : 1;
+    const struct rb_bvh_object *o = *objects;
+    for (uint32_t i = 0; i < *object_count; i++)
+        if ((uint64_t)o[i].first_triangle + o[i].triangle_count > m->triangle_count ||
+            (uint64_t)o[i].lod_first + o[i].lod_count > m->triangle_count)
             return rb_errf(
                 err, RB_E_INVALID,
                 "BVH: object %u: triangles %u to %llu or its coarser %u to %llu past the mesh's %u",
-                i, objects[i].first_triangle,
-                (unsigned long long)objects[i].first_triangle + objects[i].triangle_count,
-                objects[i].lod_first,
-                (unsigned long long)objects[i].lod_first + objects[i].lod_count, m->triangle_count);
+                i, o[i].first_triangle,
+                (unsigned long long)o[i].first_triangle + o[i].triangle_count, o[i].lod_first,
+                (unsigned long long)o[i].lod_first + o[i].lod_count, m->triangle_count);
     for (uint64_t i = 0; i < (uint64_t)m->triangle_count * 3; i++)
         if (m->indices[i] >= m->vertex_count)
             return rb_errf(err, RB_E_INVALID,
                            "BVH: triangle %llu: index %u out of range (%u vertices)",
                            (unsigned long long)(i / 3), m->indices[i], m->vertex_count);
+    if (desc->cancel && atomic_load(desc->cancel))
+        return rb_errf(err, RB_E_INTERRUPTED, "BVH of %u triangles: cancelled", m->triangle_count);
+    return RB_OK;
+}
 
-    enum rb_status st = RB_OK;
-    struct rb_bvh bvh = {.object_count = object_count};
-    struct pick *picks = calloc(object_count ? object_count : 1, sizeof(*picks));
-    /* per object: 0 left out, 1 whole, 2 by its coarser version */
-    uint8_t *is_included = calloc(object_count ? object_count : 1, sizeof(*is_included));
-    struct RTCBuildPrimitive *prims = NULL;
-    struct flat f = {.mesh = m};
-    if (!picks || !is_included) {
-        st = rb_errf(err, RB_E_NOMEM, "BVH: out of memory for %u objects", object_count);
-        goto out;
-    }
+static int by_relevance(const void *a, const void *b)
+{
+    const struct pick *x = a, *y = b;
+    if (x->relevance != y->relevance)
+        return x->relevance > y->relevance ? -1 : 1;
+    return x->object < y->object ? -1 : x->object > y->object;
+}
 
-    /* Choose: area over triangles, greedily under the budget. */
-    uint64_t valid_total = 0;
+/* Chooses the objects (rb_bvh_select's rule) into choice (object_count of them) and the counts
+ * of stats; returns the triangles chosen. picks has room for object_count. */
+static uint64_t choose(const struct rb_bvh_desc *desc, const struct rb_bvh_object *objects,
+                       uint32_t object_count, struct pick *picks, uint8_t *choice,
+                       struct rb_bvh *stats)
+{
+    const struct rb_bvh_mesh *m = desc->mesh;
+    bool is_area = desc->score == RB_BVH_SCORE_AREA;
+    uint64_t all_valid = 0;
+    double total_relevance = 0.0;
     for (uint32_t i = 0; i < object_count; i++) {
-        double area = 0.0;
+        double area = 0.0, lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX},
+               hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
         uint32_t valid = 0;
         for (uint32_t t = 0; t < objects[i].triangle_count; t++) {
-            double a = double_area(m, objects[i].first_triangle + t);
-            valid += a > 0.0;
+            uint32_t id = objects[i].first_triangle + t;
+            double a = double_area(m, id);
+            if (!(a > 0.0))
+                continue;
+            valid++;
             area += 0.5 * a;
+            for (int k = 0; k < 3; k++)
+                for (int c = 0; c < 3; c++) {
+                    lo[c] = fmin(lo[c], vertex(m, id, k)[c]);
+                    hi[c] = fmax(hi[c], vertex(m, id, k)[c]);
+                }
         }
-        bvh.triangles_degenerate += objects[i].triangle_count - valid;
+        stats->triangles_degenerate += objects[i].triangle_count - valid;
         uint32_t lod_valid = 0;
         for (uint32_t t = 0; t < objects[i].lod_count; t++)
             lod_valid += double_area(m, objects[i].lod_first + t) > 0.0;
+        /* Relevance: the object's area over its squared distance from the eye, the distance
+         * taken to its bounds' centre and widened by their half diagonal, so an object around
+         * the eye stays finite: about four times the solid angle it covers when far. */
+        double relevance = 0.0;
+        if (valid) {
+            double d2 = 0.0, r2 = 0.0;
+            for (int c = 0; c < 3; c++) {
+                double mid = 0.5 * (lo[c] + hi[c]) - (double)desc->eye[c];
+                d2 += mid * mid;
+                r2 += 0.25 * (hi[c] - lo[c]) * (hi[c] - lo[c]);
+            }
+            relevance = area / (d2 + r2);
+        }
         picks[i] = (struct pick){.object = i,
                                  .valid = valid,
                                  .lod_valid = lod_valid,
-                                 .score = valid ? area / valid : 0.0};
+                                 .relevance = relevance,
+                                 .score = valid ? (is_area ? area : relevance) / valid : 0.0};
+        all_valid += valid;
+        total_relevance += relevance;
     }
+    uint64_t budget = desc->triangle_budget ? desc->triangle_budget : UINT64_MAX;
+    /* Seed 003's shares: each object's part of the budget in proportion to its relevance; an
+     * object over its share enters by its coarser version, and its score is its relevance per
+     * triangle of that version. */
+    if (!is_area && all_valid > budget && total_relevance > 0.0)
+        for (uint32_t i = 0; i < object_count; i++) {
+            struct pick *p = &picks[i];
+            double share = (double)budget * (p->relevance / total_relevance);
+            if (p->lod_valid > 0 && p->lod_valid < p->valid && (double)p->valid > share) {
+                p->is_lod = true;
+                p->score = p->relevance / p->lod_valid;
+            }
+        }
+    /* The best score first, greedily under the budget: an object that no longer fits enters by
+     * its coarser version if that fits, or is left out, and later ones are still tried. */
     qsort(picks, object_count, sizeof(*picks), by_score);
-    uint64_t left = desc->triangle_budget ? desc->triangle_budget : UINT64_MAX;
+    uint64_t left = budget;
     for (uint32_t i = 0; i < object_count; i++) {
         struct pick *p = &picks[i];
-        if (p->valid <= left) {
+        if ((p->is_lod ? p->lod_valid : p->valid) <= left) {
             p->is_included = true;
-        } else if (p->lod_valid > 0 && p->lod_valid <= left) {
+        } else if (!p->is_lod && p->lod_valid > 0 && p->lod_valid <= left) {
             p->is_included = p->is_lod = true;
-            bvh.objects_simplified++;
         } else {
-            bvh.triangles_left_out += p->valid;
+            p->is_lod = false;
+            stats->triangles_left_out += p->valid;
             continue;
         }
-        uint32_t taken = p->is_lod ? p->lod_valid : p->valid;
-        left -= taken;
-        valid_total += taken;
-        bvh.objects_included++;
+        left -= p->is_lod ? p->lod_valid : p->valid;
     }
-    /* Back to object order, so the primitives go to Embree in a fixed order. */
+    /* What the budget has left makes coarser objects whole again, the most relevant first
+     * (none can let a left-out object in: each was tried with more room than is left). */
+    if (!is_area) {
+        qsort(picks, object_count, sizeof(*picks), by_relevance);
+        for (uint32_t i = 0; i < object_count; i++) {
+            struct pick *p = &picks[i];
+            if (p->is_included && p->is_lod && p->valid - p->lod_valid <= left) {
+                left -= p->valid - p->lod_valid;
+                p->is_lod = false;
+            }
+        }
+    }
+    uint64_t total = 0;
+    for (uint32_t i = 0; i < object_count; i++) {
+        const struct pick *p = &picks[i];
+        choice[p->object] = !p->is_included ? RB_BVH_LEFT_OUT
+                            : p->is_lod     ? RB_BVH_COARSER
+                                            : RB_BVH_WHOLE;
+        if (!p->is_included)
+            continue;
+        stats->objects_included++;
+        stats->objects_simplified += p->is_lod;
+        total += p->is_lod ? p->lod_valid : p->valid;
+    }
+    return total;
+}
+
+enum rb_status rb_bvh_select(const struct rb_bvh_desc *desc, uint8_t *choice, struct rb_err *err)
+{
+    struct rb_bvh_object whole;
+    const struct rb_bvh_object *objects;
+    uint32_t object_count;
+    enum rb_status st = check_desc(desc, &whole, &objects, &object_count, err);
+    if (st)
+        return st;
+    /* Every object fits, degenerate triangles and all: every object whole, as choose would
+     * find (the common case, without an area computed). */
+    uint64_t all = 0;
     for (uint32_t i = 0; i < object_count; i++)
-        is_included[picks[i].object] = picks[i].is_included ? (picks[i].is_lod ? 2 : 1) : 0;
+        all += objects[i].triangle_count;
+    if (!desc->triangle_budget || all <= desc->triangle_budget) {
+        memset(choice, RB_BVH_WHOLE, object_count);
+        return RB_OK;
+    }
+    struct pick *picks = calloc(object_count ? object_count : 1, sizeof(*picks));
+    if (!picks)
+        return rb_errf(err, RB_E_NOMEM, "BVH: out of memory for %u objects", object_count);
+    struct rb_bvh stats = {0};
+    choose(desc, objects, object_count, picks, choice, &stats);
+    free(picks);
+    return RB_OK;
+}
+
+enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, struct rb_err *err)
+{
+    const struct rb_bvh_mesh *m = desc->mesh;
+    struct rb_bvh_object whole;
+    const struct rb_bvh_object *objects;
+    uint32_t object_count;
+    enum rb_status st = check_desc(desc, &whole, &objects, &object_count, err);
+    if (st)
+        return st;
+    struct rb_bvh bvh = {.object_count = object_count};
+    struct pick *picks = calloc(object_count ? object_count : 1, sizeof(*picks));
+    uint8_t *choice = calloc(object_count ? object_count : 1, sizeof(*choice));
+    struct RTCBuildPrimitive *prims = NULL;
+    struct flat f = {.mesh = m};
+    if (!picks || !choice) {
+        st = rb_errf(err, RB_E_NOMEM, "BVH: out of memory for %u objects", object_count);
+        goto out;
+    }
+    uint64_t valid_total = choose(desc, objects, object_count, picks, choice, &bvh);
 
     size_t n = (size_t)valid_total;
     prims = aligned_alloc(32, (n ? n : 1) * sizeof(*prims));
@@ -367,9 +500,9 @@ enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, 
     float lo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, hi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
     size_t k = 0;
     for (uint32_t i = 0; i < object_count; i++) {
-        if (!is_included[i])
+        if (choice[i] == RB_BVH_LEFT_OUT)
             continue;
-        bool lod = is_included[i] == 2;
+        bool lod = choice[i] == RB_BVH_COARSER;
         uint32_t first = lod ? objects[i].lod_first : objects[i].first_triangle;
         uint32_t count = lod ? objects[i].lod_count : objects[i].triangle_count;
         for (uint32_t j = 0; j < count; j++) {
@@ -406,7 +539,7 @@ enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, 
         f.node_count = 1;
         set_word(&f.nodes[0].box0_max[3], RB_BVH_LEAF_BIT);
         set_word(&f.nodes[0].box1_max[3], RB_BVH_LEAF_BIT);
-    } else if ((st = build_tree(&f, prims, n, desc->thread_count, err))) {
+    } else if ((st = build_tree(&f, prims, n, desc->thread_count, desc->cancel, err))) {
         goto out;
     }
     if (f.tri_count != n)
@@ -416,14 +549,16 @@ enum rb_status rb_bvh_build(const struct rb_bvh_desc *desc, struct rb_bvh *out, 
     bvh.triangles = f.tris;
     bvh.triangle_count = f.tri_count;
     bvh.depth = f.depth;
+    bvh.choice = choice;
     f.nodes = NULL;
     f.tris = NULL;
+    choice = NULL;
     *out = bvh;
 out:
     free(f.tris);
     free(f.nodes);
     free(prims);
-    free(is_included);
+    free(choice);
     free(picks);
     return st;
 }
@@ -432,5 +567,6 @@ void rb_bvh_release(struct rb_bvh *bvh)
 {
     free(bvh->nodes);
     free(bvh->triangles);
+    free(bvh->choice);
     memset(bvh, 0, sizeof(*bvh));
 }

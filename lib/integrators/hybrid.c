@@ -3,10 +3,10 @@
  *   -> bvh_rays -> accumulate -> tiles -> diffuse_filter -> specular_filter -> output
  * Rasterize what can be rasterized (the G-buffer, shadow maps), sample each lobe of the BRDF at
  * every pixel that still wants samples, trace in screen space first and through a BVH (built on
- * the CPU with Embree's builder, lib/bvh, from the objects of best score under a triangle budget,
- * an object that does not fit whole by a coarser version) what the screen cannot answer, shade
- * both kinds of hit alike, accumulate over time and filter with a kernel that shrinks as samples
- * grow.
+ * the CPU with Embree's builder, lib/bvh, on a thread of its own, from the objects of best score
+ * under a triangle budget, an object that does not fit whole by a coarser version) what the
+ * screen cannot answer, shade both kinds of hit alike, accumulate over time and filter with a
+ * kernel that shrinks as samples grow.
  *
  * History. Two accumulators take every sample; accumulator A starts again on the frames
  * sequence_start + kW, B on sequence_start + kW + W/2 (and both on sequence_start), W =
@@ -15,8 +15,22 @@
  * request depends on anything before the older one's start. A frame's state therefore depends on
  * the W frames before it at most (history_frames = W): a chunk that renders them first as
  * warm-ups gets the bits of a whole run. Warm-ups before the job's first frame record nothing
- * but animate. The BVH is built from the pose of the last frame that is a multiple of
- * bvh_interval after sequence_start, whatever frame the run began at.
+ * but animate.
+ *
+ * The BVH's schedule (seed 003: "async BVH construction"). Frame f traces the BVH of the pose of
+ * its epoch e(f), the last frame at or before f that is a multiple of bvh_interval after
+ * sequence_start, whatever frame the run began at and however long anything took; its objects
+ * are chosen as seen from e(f)'s camera (rb_bvh_select's relevance). The build
+ * and the bake run on a worker thread, ahead of time: as soon as the prepare of e's first frame
+ * has uploaded e's BVH, the thread starts on e + bvh_interval's (the animation is a function of
+ * time, so a later pose is known now; none past the run's last frame) while the main thread
+ * records and the device runs the frames up to it. The first frame of the next epoch waits for
+ * that build if it is not done yet, and uploads it: the device's buffers are the main thread's
+ * alone. A run's first frame builds its epoch's BVH and waits for it; one that needs another
+ * epoch than the one built ahead (after a gap in a frame list) cancels that build and builds
+ * the one it needs. So the thread changes when the work is done, never what is built: the bits
+ * are those of a build on the main thread before each epoch's first frame, and chunks and
+ * thread counts cannot change them.
  *
  * Baked light (seed 003: "bake direct artificial light"). When the BVH is built, the direct light
  * of the emissive triangles and the environment is baked at points of its triangles (a lattice
@@ -26,13 +40,44 @@
 #include "integrators/integrators_int.h"
 
 #include <math.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "bvh/bvh.h"
 #include "reference/reference.h"
 
+/* The BVH's thread (the schedule above). The main thread posts the epoch it wants built and
+ * takes the result before it posts another. While a job is posted, what the build and the bake
+ * use (positions, built, has_built, bvh_pose, the bake's buffers and world, the result) is the
+ * worker's alone; while none is, the main thread's. The device's buffers are always the main
+ * thread's. */
+enum bvh_state { BVH_IDLE, BVH_POSTED, BVH_DONE };
+
+struct bvh_worker {
+    pthread_t thread;
+    pthread_mutex_t lock;
+    pthread_cond_t cond;
+    bool has_sync, has_thread;
+    enum bvh_state state; /* under lock */
+    bool is_quitting;     /* under lock */
+    atomic_bool cancel;   /* stop the posted build early: its result is dropped */
+    int64_t epoch;        /* the frame whose pose the posted job builds (the main thread's) */
+    float eye[3];         /* the camera's position at that frame (the BVH's relevance) */
+    /* the result */
+    enum rb_status st;
+    struct rb_err err;
+    bool is_same; /* the pose moved no vertex since the BVH the device holds: it stands */
+    struct rb_bvh bvh;
+    uint32_t bake_count; /* points baked (0: no bake) */
+    uint64_t bake_rays;
+    double build_ms, bake_ms;
+};
+
 struct hybrid {
+    struct rb_integrator *it; /* the worker's way to the job, the scene and the frame's sizes */
     struct rb_base base;
     struct rb_pass_hybrid *passes;
     struct rb_hybrid_frame h;
@@ -48,9 +93,15 @@ struct hybrid {
     struct rb_bvh_object *objects;
     uint32_t object_count;
     struct rb_scene_pose *bvh_pose;
+    struct rb_scene_pose *eye_pose; /* the main thread's, for the camera of an epoch */
+    uint8_t *choice, *built_choice; /* the worker's: rb_bvh_select's, and the device BVH's */
+    uint8_t *logged_choice;         /* the main thread's: the last selection logged */
+    bool has_logged_choice;
     uint32_t node_capacity, tri_capacity;
-    bool has_bvh;
-    int64_t bvh_epoch; /* the frame whose pose the BVH holds */
+    bool has_bvh;      /* the device holds a BVH (the main thread's) */
+    int64_t bvh_epoch; /* the frame whose pose it holds */
+    bool has_built;    /* built holds the device BVH's vertices (the worker's) */
+    struct bvh_worker worker;
     struct rb_ray_counts counts;
     bool has_counts;
     /* the bake: the reference's world of the scene, NULL when nothing emits; its points, their
@@ -73,6 +124,21 @@ static void destroy(struct rb_integrator *it, void *state)
     struct hybrid *d = state;
     if (!d)
         return;
+    struct bvh_worker *w = &d->worker;
+    if (w->has_thread) {
+        /* A build ahead stops at once; a bake runs to its end (at most one frame's). */
+        pthread_mutex_lock(&w->lock);
+        w->is_quitting = true;
+        atomic_store(&w->cancel, true);
+        pthread_cond_broadcast(&w->cond);
+        pthread_mutex_unlock(&w->lock);
+        pthread_join(w->thread, NULL);
+    }
+    if (w->has_sync) {
+        pthread_cond_destroy(&w->cond);
+        pthread_mutex_destroy(&w->lock);
+    }
+    rb_bvh_release(&w->bvh);
     struct rb_gpu *gpu = it->gpu;
     struct rb_hybrid_frame *h = &d->h;
     struct rb_gpu_buffer *bufs[] = {&h->hiz,      &h->slots,  &h->counters,
@@ -88,6 +154,10 @@ static void destroy(struct rb_integrator *it, void *state)
     rb_pass_hybrid_destroy(d->passes);
     rb_base_destroy(&d->base);
     rb_scene_pose_destroy(d->bvh_pose);
+    rb_scene_pose_destroy(d->eye_pose);
+    free(d->choice);
+    free(d->built_choice);
+    free(d->logged_choice);
     rb_reference_destroy(d->ref);
     free(d->bake_points);
     free(d->bake_rgb);
@@ -154,7 +224,11 @@ static enum rb_status geometry_init(struct rb_integrator *it, struct hybrid *d, 
     d->positions = malloc(((size_t)it->frame.vertex_count + 1) * 6 * sizeof(float));
     d->built = malloc(((size_t)it->frame.vertex_count + 1) * 6 * sizeof(float));
     d->objects = malloc(((size_t)pose->instance_count + 1) * sizeof(*d->objects));
-    if (!d->indices || !d->positions || !d->built || !d->objects)
+    d->choice = calloc((size_t)pose->instance_count + 1, 1);
+    d->built_choice = calloc((size_t)pose->instance_count + 1, 1);
+    d->logged_choice = calloc((size_t)pose->instance_count + 1, 1);
+    if (!d->indices || !d->positions || !d->built || !d->objects || !d->choice ||
+        !d->built_choice || !d->logged_choice)
         return rb_errf(err, RB_E_NOMEM, "out of memory for the BVH's %llu triangles",
                        (unsigned long long)(icount / 3));
     d->triangle_count = (uint32_t)(icount / 3);
@@ -166,6 +240,8 @@ static enum rb_status geometry_init(struct rb_integrator *it, struct hybrid *d, 
     }
     d->object_count = pose->instance_count;
     enum rb_status st = rb_scene_pose_create(scene, &d->bvh_pose, err);
+    if (st == RB_OK)
+        st = rb_scene_pose_create(scene, &d->eye_pose, err);
     if (st || !d->settings->bvh_lod)
         return st;
     return lod_init(it, d, err);
@@ -341,18 +417,45 @@ static enum rb_status bake_init(struct rb_integrator *it, struct hybrid *d, stru
     return st;
 }
 
+static void *bvh_main(void *arg);
+
+/* Starts the BVH's thread, with every signal blocked in it: SIGINT and SIGTERM stay the main
+ * thread's, as the frame driver's callers expect. */
+static enum rb_status worker_start(struct hybrid *d, struct rb_err *err)
+{
+    struct bvh_worker *w = &d->worker;
+    atomic_init(&w->cancel, false);
+    if (pthread_mutex_init(&w->lock, NULL) != 0)
+        return rb_errf(err, RB_E_NOMEM, "hybrid: cannot create the BVH thread's lock");
+    if (pthread_cond_init(&w->cond, NULL) != 0) {
+        pthread_mutex_destroy(&w->lock);
+        return rb_errf(err, RB_E_NOMEM, "hybrid: cannot create the BVH thread's condition");
+    }
+    w->has_sync = true;
+    sigset_t all, old;
+    sigfillset(&all);
+    pthread_sigmask(SIG_SETMASK, &all, &old);
+    int e = pthread_create(&w->thread, NULL, bvh_main, d);
+    pthread_sigmask(SIG_SETMASK, &old, NULL);
+    if (e != 0)
+        return rb_errf(err, RB_E_NOMEM, "hybrid: cannot start the BVH's thread: %s", strerror(e));
+    w->has_thread = true;
+    return RB_OK;
+}
+
 static enum rb_status create(struct rb_integrator *it, void **state, struct rb_err *err)
 {
     struct hybrid *d = calloc(1, sizeof(*d));
     if (!d)
         return rb_errf(err, RB_E_NOMEM, "out of memory");
+    d->it = it;
     d->settings = &it->job->integrator.hybrid;
     d->bvh_epoch = INT64_MIN;
     enum rb_status st;
     if ((st = rb_base_create(it, &d->base, err)) ||
         (st = rb_pass_hybrid_create(it->gpu, &d->passes, err)) ||
         (st = geometry_init(it, d, err)) || (st = bake_init(it, d, err)) ||
-        (st = create_resources(it, d, err))) {
+        (st = create_resources(it, d, err)) || (st = worker_start(d, err))) {
         destroy(it, d);
         return st;
     }
@@ -399,8 +502,9 @@ static double edge_len(const float a[4], const float b[4])
 }
 
 /* Bakes the emitters' and the environment's light at the lattices of the BVH's triangles (pose
- * of frame epoch) into the device's bake buffer and each triangle's v2.w. The spacing is the
- * finest whose points fit in three a side of every triangle plus bake_texels. */
+ * of frame epoch) into bake_rgb, the words into bake_words and each triangle's v2.w (the
+ * worker's; upload copies them to the device). The spacing is the finest whose points fit in
+ * three a side of every triangle plus bake_texels. */
 static enum rb_status bake(struct rb_integrator *it, struct hybrid *d, struct rb_bvh *bvh,
                            int64_t epoch, struct rb_err *err)
 {
@@ -413,7 +517,7 @@ static enum rb_status bake(struct rb_integrator *it, struct hybrid *d, struct rb
         return rb_errf(err, RB_E_NOMEM, "out of memory for the bake of %u triangles", n);
     }
     const struct rb_scene *scene = it->scene;
-    const struct rb_scene_pose *pose = it->cur.pose;
+    const struct rb_scene_pose *pose = d->bvh_pose;
     double longest = 0.0;
     for (uint32_t k = 0; k < n; k++) {
         const struct rb_gpu_bvh_triangle *t = &bvh->triangles[k];
@@ -478,96 +582,272 @@ static enum rb_status bake(struct rb_integrator *it, struct hybrid *d, struct rb
     free(edge);
     free(sides);
     double start = rb_monotonic_s();
-    uint64_t rays = 0;
-    enum rb_status st = rb_reference_bake(d->ref, (int)epoch, d->bake_points, count,
-                                          d->settings->bake_samples, d->bake_rgb, &rays, err);
-    if (st)
-        return st;
-    /* The device's copy only once the bake has succeeded. */
+    struct bvh_worker *w = &d->worker;
+    enum rb_status st =
+        rb_reference_bake(d->ref, (int)epoch, d->bake_points, count, d->settings->bake_samples,
+                          d->bake_rgb, &w->bake_rays, err);
+    w->bake_count = count;
+    w->bake_ms = (rb_monotonic_s() - start) * 1e3;
+    return st;
+}
+
+/* The device's copy of the bake the worker made (the main thread, the worker idle). */
+static void upload_bake(struct hybrid *d, const struct rb_bvh *bvh, int64_t epoch)
+{
+    const struct bvh_worker *w = &d->worker;
     char *room = (char *)d->h.bvh_tris.mapped + (size_t)d->tri_capacity * sizeof(*bvh->triangles);
     memset(room, 0, (size_t)d->word_vec4s * 16);
-    memcpy(room, words, (size_t)all_triangles(d) * sizeof(*words));
+    memcpy(room, d->bake_words, (size_t)all_triangles(d) * sizeof(*d->bake_words));
     float *dst = (float *)(room + (size_t)d->word_vec4s * 16);
-    for (uint32_t i = 0; i < count; i++) {
+    for (uint32_t i = 0; i < w->bake_count; i++) {
         memcpy(dst + (size_t)i * 4, d->bake_rgb + (size_t)i * 3, 3 * sizeof(float));
         dst[(size_t)i * 4 + 3] = 0.0f;
     }
     rb_log(RB_LOG_DEBUG,
-           "hybrid: baked %u points of %u triangles for frame %lld, %llu rays, %.1f ms", count, n,
-           (long long)epoch, (unsigned long long)rays, (rb_monotonic_s() - start) * 1e3);
+           "hybrid: baked %u points of %u triangles for frame %lld, %llu rays, %.1f ms",
+           w->bake_count, bvh->triangle_count, (long long)epoch, (unsigned long long)w->bake_rays,
+           w->bake_ms);
     d->has_bake = true;
-    return RB_OK;
 }
 
-/* Builds the BVH of the pose at frame epoch and uploads it. */
+/* The worker's job: builds (and bakes) the BVH of the pose at frame epoch into the worker's
+ * result, or finds that the pose moved no vertex since the BVH the device holds. */
 static enum rb_status build_bvh(struct rb_integrator *it, struct hybrid *d, int64_t epoch,
                                 struct rb_err *err)
 {
+    struct bvh_worker *w = &d->worker;
     rb_scene_evaluate(it->scene, &it->sel, (double)epoch / it->job->rate_fps, d->bvh_pose);
     size_t v = it->frame.vertex_count;
     rb_scene_deform(it->scene, d->bvh_pose, d->positions, 3, d->ref ? d->positions + v * 3 : NULL,
                     NULL, NULL);
-    /* The build is a function of the vertices alone (the triangles, objects and budget do not
-     * change), the bake of their positions and normals: a pose that did not move them keeps the
-     * BVH the device has. */
-    size_t bytes = v * (d->ref ? 6 : 3) * sizeof(float);
-    if (d->has_bvh && memcmp(d->positions, d->built, bytes) == 0) {
-        d->bvh_epoch = epoch;
-        return RB_OK;
-    }
     const struct rb_bvh_mesh mesh = {.positions = d->positions,
                                      .stride_floats = 3,
                                      .vertex_count = it->frame.vertex_count,
                                      .indices = d->indices,
                                      .triangle_count = (uint32_t)all_triangles(d)};
-    struct rb_bvh bvh = {0};
-    enum rb_status st =
-        rb_bvh_build(&(struct rb_bvh_desc){.mesh = &mesh,
-                                           .objects = d->objects,
-                                           .object_count = d->object_count,
-                                           .triangle_budget = d->settings->bvh_triangles,
-                                           .thread_count = 0},
-                     &bvh, err);
+    const struct rb_bvh_desc desc = {
+        .mesh = &mesh,
+        .objects = d->objects,
+        .object_count = d->object_count,
+        .triangle_budget = d->settings->bvh_triangles,
+        .score = d->settings->bvh_select == RB_BVH_SELECT_AREA ? RB_BVH_SCORE_AREA
+                                                               : RB_BVH_SCORE_RELEVANCE,
+        .eye = {w->eye[0], w->eye[1], w->eye[2]},
+        .thread_count = 0,
+        .cancel = &w->cancel,
+    };
+    /* The build is a function of the vertices and of the objects chosen (the triangles, objects
+     * and budget do not change), the bake of their positions and normals: a pose that did not
+     * move them, seen from where the same objects are chosen, keeps the BVH the device has. */
+    enum rb_status st = rb_bvh_select(&desc, d->choice, err);
     if (st) {
         rb_err_prefix(err, "hybrid: the BVH of frame %lld", (long long)epoch);
         return st;
     }
-    if (bvh.node_count > d->node_capacity || bvh.triangle_count > d->tri_capacity) {
+    size_t bytes = v * (d->ref ? 6 : 3) * sizeof(float);
+    if (d->has_built && memcmp(d->positions, d->built, bytes) == 0 &&
+        memcmp(d->choice, d->built_choice, d->object_count) == 0) {
+        w->is_same = true;
+        return RB_OK;
+    }
+    double start = rb_monotonic_s();
+    struct rb_bvh *bvh = &w->bvh;
+    st = rb_bvh_build(&desc, bvh, err);
+    if (st) {
+        rb_err_prefix(err, "hybrid: the BVH of frame %lld", (long long)epoch);
+        return st;
+    }
+    w->build_ms = (rb_monotonic_s() - start) * 1e3;
+    if (bvh->node_count > d->node_capacity || bvh->triangle_count > d->tri_capacity)
         st = rb_errf(err, RB_E_INVALID,
                      "hybrid: the BVH of frame %lld has %u nodes and %u triangles, more than "
                      "the %u and %u it was given room for",
-                     (long long)epoch, bvh.node_count, bvh.triangle_count, d->node_capacity,
+                     (long long)epoch, bvh->node_count, bvh->triangle_count, d->node_capacity,
                      d->tri_capacity);
-    } else if (!d->ref || (st = bake(it, d, &bvh, epoch, err)) == RB_OK) {
-        memcpy(d->h.bvh_nodes.mapped, bvh.nodes, bvh.node_count * sizeof(*bvh.nodes));
-        memcpy(d->h.bvh_tris.mapped, bvh.triangles, bvh.triangle_count * sizeof(*bvh.triangles));
-        if (bvh.triangles_left_out || bvh.objects_simplified)
-            rb_log(RB_LOG_INFO,
-                   "hybrid: the BVH holds %u of %u objects (%u triangles), %u of them by their "
-                   "coarser version; %llu triangles left out by the budget of %u",
-                   bvh.objects_included, bvh.object_count, bvh.triangle_count,
-                   bvh.objects_simplified, (unsigned long long)bvh.triangles_left_out,
-                   d->settings->bvh_triangles);
-        d->bvh_epoch = epoch;
-        d->has_bvh = true;
-        float *t = d->built;
-        d->built = d->positions;
-        d->positions = t;
+    else if (d->ref)
+        st = bake(it, d, bvh, epoch, err);
+    if (st) {
+        rb_bvh_release(bvh);
+        return st;
     }
-    rb_bvh_release(&bvh);
-    return st;
+    d->has_built = true;
+    memcpy(d->built_choice, bvh->choice, d->object_count);
+    float *t = d->built;
+    d->built = d->positions;
+    d->positions = t;
+    return RB_OK;
 }
 
+static void *bvh_main(void *arg)
+{
+    struct hybrid *d = arg;
+    struct bvh_worker *w = &d->worker;
+    pthread_mutex_lock(&w->lock);
+    for (;;) {
+        while (w->state != BVH_POSTED && !w->is_quitting)
+            pthread_cond_wait(&w->cond, &w->lock);
+        if (w->is_quitting)
+            break;
+        int64_t epoch = w->epoch;
+        pthread_mutex_unlock(&w->lock);
+        struct rb_err err = RB_ERR_INIT;
+        enum rb_status st = build_bvh(d->it, d, epoch, &err);
+        pthread_mutex_lock(&w->lock);
+        w->st = st;
+        w->err = err;
+        w->state = BVH_DONE;
+        pthread_cond_broadcast(&w->cond);
+    }
+    pthread_mutex_unlock(&w->lock);
+    return NULL;
+}
+
+/* The main thread's side of the worker: post a job (none posted), wait for its result. */
+static void worker_post(struct bvh_worker *w, int64_t epoch, const struct rb_camera *cam)
+{
+    pthread_mutex_lock(&w->lock);
+    if (w->state != BVH_IDLE)
+        RB_BUG("a second BVH job posted before the first was taken");
+    w->epoch = epoch;
+    w->eye[0] = cam->position.x;
+    w->eye[1] = cam->position.y;
+    w->eye[2] = cam->position.z;
+    w->st = RB_OK;
+    w->is_same = false;
+    w->bake_count = 0;
+    w->state = BVH_POSTED;
+    pthread_cond_broadcast(&w->cond);
+    pthread_mutex_unlock(&w->lock);
+}
+
+/* Waits for the posted job, if any, and takes it: the worker is idle afterwards. Returns
+ * whether a job was posted. */
+static bool worker_take(struct bvh_worker *w)
+{
+    pthread_mutex_lock(&w->lock);
+    bool was_posted = w->state != BVH_IDLE;
+    while (w->state == BVH_POSTED)
+        pthread_cond_wait(&w->cond, &w->lock);
+    w->state = BVH_IDLE;
+    pthread_mutex_unlock(&w->lock);
+    return was_posted;
+}
+
+/* Logs (debug) what the BVH of frame epoch holds of each object, when that changed. */
+static void log_choice(struct hybrid *d, const struct rb_bvh *bvh, int64_t epoch)
+{
+    if (d->has_logged_choice && memcmp(d->logged_choice, bvh->choice, d->object_count) == 0)
+        return;
+    static const char *const what[] = {"left out", "whole", "coarser"};
+    const struct rb_scene *scene = d->it->scene;
+    const struct rb_scene_pose *pose = d->it->cur.pose;
+    for (uint32_t i = 0; i < d->object_count; i++) {
+        const struct rb_bvh_object *o = &d->objects[i];
+        uint8_t c = bvh->choice[i];
+        const char *name = scene->nodes[pose->instances[i].node].name;
+        rb_log(RB_LOG_DEBUG,
+               "hybrid: the BVH of frame %lld: object %u (node '%s'): %s, %u triangles",
+               (long long)epoch, i, name ? name : "", what[c < 3 ? c : 0],
+               c == RB_BVH_COARSER ? o->lod_count : o->triangle_count);
+    }
+    memcpy(d->logged_choice, bvh->choice, d->object_count);
+    d->has_logged_choice = true;
+}
+
+/* Uploads the worker's result as the BVH of frame epoch (the main thread, the worker idle). */
+static void upload(struct hybrid *d, int64_t epoch, double wait_ms)
+{
+    struct bvh_worker *w = &d->worker;
+    d->bvh_epoch = epoch;
+    if (w->is_same) {
+        rb_log(RB_LOG_DEBUG, "hybrid: the pose of frame %lld keeps the BVH (waited %.1f ms)",
+               (long long)epoch, wait_ms);
+        return;
+    }
+    struct rb_bvh *bvh = &w->bvh;
+    if (d->ref)
+        upload_bake(d, bvh, epoch);
+    memcpy(d->h.bvh_nodes.mapped, bvh->nodes, bvh->node_count * sizeof(*bvh->nodes));
+    memcpy(d->h.bvh_tris.mapped, bvh->triangles, bvh->triangle_count * sizeof(*bvh->triangles));
+    if (bvh->triangles_left_out || bvh->objects_simplified)
+        rb_log(RB_LOG_INFO,
+               "hybrid: the BVH holds %u of %u objects (%u triangles), %u of them by their "
+               "coarser version; %llu triangles left out by the budget of %u",
+               bvh->objects_included, bvh->object_count, bvh->triangle_count,
+               bvh->objects_simplified, (unsigned long long)bvh->triangles_left_out,
+               d->settings->bvh_triangles);
+    log_choice(d, bvh, epoch);
+    rb_log(RB_LOG_DEBUG,
+           "hybrid: the BVH of frame %lld: built in %.1f ms and baked in %.1f ms on its thread, "
+           "%.1f ms of it waited for",
+           (long long)epoch, w->build_ms, w->bake_ms, wait_ms);
+    d->has_bvh = true;
+    rb_bvh_release(bvh);
+}
+
+/* The camera at frame epoch, whose position the BVH's relevance is seen from (the main thread:
+ * the camera's evaluation may log). */
+static enum rb_status epoch_camera(struct rb_integrator *it, struct hybrid *d, int64_t epoch,
+                                   struct rb_camera *cam, struct rb_err *err)
+{
+    double t = (double)epoch / it->job->rate_fps;
+    rb_scene_evaluate(it->scene, &it->sel, t, d->eye_pose);
+    return rb_camera_evaluate(it->job, it->scene, &it->setup, d->eye_pose, t, cam, err);
+}
+
+/* The schedule of the file comment: the BVH of frame f's epoch, from the worker, and the next
+ * epoch's build started at once. */
 static enum rb_status prepare(struct rb_integrator *it, void *state, const struct rb_frame_ctx *ctx,
                               struct rb_err *err)
 {
     struct hybrid *d = state;
+    struct bvh_worker *w = &d->worker;
     if (ctx->frame < it->job->sequence_start)
         return RB_OK;
     int64_t epoch = bvh_epoch(it, d, ctx->frame);
     if (d->has_bvh && d->bvh_epoch == epoch)
         return RB_OK;
-    return build_bvh(it, d, epoch, err);
+    double start = rb_monotonic_s();
+    pthread_mutex_lock(&w->lock);
+    bool is_posted = w->state != BVH_IDLE;
+    pthread_mutex_unlock(&w->lock);
+    if (is_posted && w->epoch != epoch) {
+        /* Built ahead for an epoch this run skips (a gap in a frame list): dropped, and its
+         * vertices are not the device's. */
+        atomic_store(&w->cancel, true);
+        worker_take(w);
+        atomic_store(&w->cancel, false);
+        rb_bvh_release(&w->bvh);
+        d->has_built = false;
+        is_posted = false;
+        rb_log(RB_LOG_DEBUG,
+               "hybrid: dropped the BVH built ahead for frame %lld: frame %d needs "
+               "frame %lld's",
+               (long long)w->epoch, ctx->frame, (long long)epoch);
+    }
+    struct rb_camera cam;
+    enum rb_status st;
+    if (!is_posted) {
+        if ((st = epoch_camera(it, d, epoch, &cam, err)))
+            return st;
+        worker_post(w, epoch, &cam);
+    }
+    worker_take(w);
+    if (w->st) {
+        rb_bvh_release(&w->bvh);
+        *err = w->err;
+        return w->st;
+    }
+    upload(d, epoch, (rb_monotonic_s() - start) * 1e3);
+    /* The next epoch's, while this frame and the ones before it run; none past the run's last
+     * frame. */
+    int64_t next = epoch + d->settings->bvh_interval;
+    if (it->job->frame_end < 0 || next <= it->job->frame_end) {
+        if ((st = epoch_camera(it, d, next, &cam, err)))
+            return st;
+        worker_post(w, next, &cam);
+    }
+    return RB_OK;
 }
 
 /* The frame's settings in the push constants: which accumulator starts again, which one the

@@ -70,6 +70,7 @@ static const char *const hit_test_names[] = {NULL, "gaussian", "binary"};
 static const char *const samples_names[] = {NULL, "periodic", "fresh"};
 static const char *const light_names[] = {NULL, "point", "spot", "directional"};
 static const char *const default_light_names[] = {NULL, "auto", "on", "off"};
+static const char *const bvh_select_names[] = {NULL, "relevance", "area"};
 
 #define COUNT(a) (sizeof(a) / sizeof((a)[0]))
 #define JOB(f) offsetof(struct rb_job, f)
@@ -261,6 +262,9 @@ static const struct key keys[] = {
     K("integrator.hybrid.bvh_triangles", KT_UINT, JOB(integrator.hybrid.bvh_triangles), 0,
       UINT32_MAX, "2000000", 0,
       "hybrid: triangle budget of the BVH, filled with the objects of best score; 0: all"),
+    K("integrator.hybrid.bvh_select", KT_ENUM, JOB(integrator.hybrid.bvh_select), NOLO, NOHI,
+      "relevance", 0, "hybrid: the BVH's object score (relevance from the camera, or area)",
+      ENUM(bvh_select_names)),
     K("integrator.hybrid.bvh_lod", KT_BOOL, JOB(integrator.hybrid.bvh_lod), NOLO, NOHI, "true", 0,
       "hybrid: an object over the BVH's budget may enter by a quarter of its triangles"),
     K("integrator.hybrid.bvh_interval", KT_UINT, JOB(integrator.hybrid.bvh_interval), 1, 100000,
@@ -1419,6 +1423,7 @@ void rb_job_rehash(struct rb_job *job)
         h = h_u32(h, y->screen_steps);
         h = h_u32(h, y->bvh_triangles);
         h = h_u32(h, y->bvh_interval);
+        h = h_u32(h, (uint32_t)y->bvh_select);
         h = h_u32(h, y->bvh_lod);
         h = h_u32(h, y->bake_texels);
         h = h_u32(h, y->bake_samples);

@@ -56,6 +56,13 @@ enum rb_bdpt_samples {
     RB_BDPT_SAMPLES_FRESH,       /* frame f the f-th block: new points every frame */
 };
 
+/* How the hybrid's BVH scores objects for its triangle budget. */
+enum rb_bvh_select {
+    RB_BVH_SELECT_DEFAULT = 0, /* resolves to RELEVANCE */
+    RB_BVH_SELECT_RELEVANCE,   /* projected size from the camera over triangles */
+    RB_BVH_SELECT_AREA,        /* world area over triangles, camera-independent */
+};
+
 /* Where the reference's samples pass through a pixel. */
 enum rb_pixel_filter {
     RB_PIXEL_FILTER_DEFAULT = 0, /* resolves to CENTER */
@@ -196,6 +203,8 @@ struct rb_job {
             uint32_t filter_radius_px; /* the filter's radius at one sample, default 6 */
             float filter_depth;        /* relative depth difference that stops it, 0.05 */
             float filter_normal;       /* cosine between normals below which it stops, 0.9 */
+            /* the score the BVH's budget chooses objects by, default relevance */
+            enum rb_bvh_select bvh_select;
         } hybrid;
         struct {
             uint32_t spp;         /* samples per pixel, default 64 */

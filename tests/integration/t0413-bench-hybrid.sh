@@ -46,6 +46,8 @@ for run in "1 ray:64" "4 rays:256"; do
             "${run%:*} a lobe: the error after $f"
     done
 done
+stdout_has "^hybrid moving demo (jobs/demo-hybrid.yaml) at 32x18, medians over frames 1-2: frame wall $x ms, GPU passes $x ms, wall / GPU $x$" \
+    "the moving demo's wall over GPU time"
 stdout_has "^hybrid bench took $x min; load average" "the bench's own time and the machine's load"
 check "no figure is NaN or infinite" sh -c "! grep -qiE '(^|[^a-z])-?(nan|inf)([^a-z]|$)' '$T/stdout'"
 

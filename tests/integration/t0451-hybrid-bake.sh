@@ -47,8 +47,8 @@ for b in 0 2000000; do
     expect_exit 0 "the demo with a BVH budget of $b triangles"
 done
 check "a BVH budget of 0 gives the whole scene's bits" same "$T/b0/frame.0001.exr" "$T/b2000000/frame.0001.exr"
-# Seed 003's LOD: under a budget of 300 of the demo's 754 triangles, an object that does not
-# fit whole enters by a quarter of its triangles (the info log says so), and the BVH finds more
+# Seed 003's LOD: under a budget of 300 of the demo's 754 triangles, objects over their share
+# enter by a quarter of their triangles (the info log says so), and the BVH finds more
 # of the scene: more BVH hits, and more screen hits it agrees with, than without coarser objects.
 bvh_hits() { sed -n 's/.*"bvh_hits": \([0-9]*\).*/\1/p' "$1"; }
 agreed() { sed -n 's/.*"agreed": \([0-9]*\).*/\1/p' "$1"; }
@@ -59,8 +59,8 @@ for lod in true false; do
     expect_exit 0 "the demo under a BVH budget of 300 triangles, bvh_lod $lod"
     cp "$T/stderr" "$T/lod$lod.log"
 done
-check "with bvh_lod an object enters by its coarser version" \
-    grep -q "objects (300 triangles), 1 of them by their coarser version" "$T/lodtrue.log"
+check "with bvh_lod objects enter by their coarser version" \
+    grep -q "objects ([0-9]* triangles), [1-9][0-9]* of them by their coarser version" "$T/lodtrue.log"
 check "without it none does" grep -q "0 of them by their coarser version" "$T/lodfalse.log"
 hl=$(bvh_hits "$T/lodtrue/frame.0001.timing.json") hn=$(bvh_hits "$T/lodfalse/frame.0001.timing.json")
 al=$(agreed "$T/lodtrue/frame.0001.timing.json") an=$(agreed "$T/lodfalse/frame.0001.timing.json")

@@ -342,7 +342,8 @@ static void test_budget(void **state)
         build(&(struct rb_bvh_desc){.mesh = &m,
                                     .objects = objects,
                                     .object_count = 4,
-                                    .triangle_budget = cases[c].budget},
+                                    .triangle_budget = cases[c].budget,
+                                    .score = RB_BVH_SCORE_AREA},
               &bvh);
         uint32_t seen = 0, count = 0;
         for (uint32_t i = 0; i < bvh.triangle_count; i++)
@@ -388,7 +389,8 @@ static void test_lod(void **state)
         build(&(struct rb_bvh_desc){.mesh = &m,
                                     .objects = objects,
                                     .object_count = 4,
-                                    .triangle_budget = cases[c].budget},
+                                    .triangle_budget = cases[c].budget,
+                                    .score = RB_BVH_SCORE_AREA},
               &bvh);
         uint32_t seen = 0;
         for (uint32_t i = 0; i < bvh.triangle_count; i++)
@@ -398,6 +400,72 @@ static void test_lod(void **state)
         assert_int_equal(seen, cases[c].triangles);
         assert_int_equal(bvh.objects_simplified, cases[c].simplified);
         assert_int_equal(bvh.triangles_left_out, cases[c].left_out);
+        rb_bvh_release(&bvh);
+    }
+}
+
+/* Relevance from the eye (rb_bvh_select): two objects alike, four unit right triangles (area 2)
+ * with a coarser version of one, at x 0 and x 100; the eye 3 m from one of them. Its share of
+ * the budget is nearly all of it, the other's nearly none. The area score cannot tell them
+ * apart and takes object 0 first wherever the eye is. */
+static void test_relevance(void **state)
+{
+    (void)state;
+    float pos[10 * 9];
+    uint32_t idx[10 * 3];
+    for (uint32_t o = 0; o < 2; o++)
+        for (uint32_t k = 0; k < 5; k++) {
+            uint32_t t = o * 5 + k;
+            float x = 100.0f * (float)o + 2.0f * (float)k, leg = k < 4 ? 1.0f : 2.0f;
+            const float v[9] = {x, 0, 0, x + leg, 0, 0, x, leg, 0};
+            memcpy(&pos[t * 9], v, sizeof(v));
+            for (uint32_t j = 0; j < 3; j++)
+                idx[t * 3 + j] = t * 3 + j;
+        }
+    struct rb_bvh_mesh m = soup(pos, 30, idx, 10);
+    const struct rb_bvh_object objects[] = {{0, 4, 4, 1}, {5, 4, 9, 1}};
+    enum { O = RB_BVH_LEFT_OUT, W = RB_BVH_WHOLE, C = RB_BVH_COARSER };
+    static const struct {
+        enum rb_bvh_score score;
+        float eye_x;
+        uint64_t budget;
+        uint8_t want[2];
+    } cases[] = {
+        /* the near one whole, the far one by its coarser version */
+        {RB_BVH_SCORE_RELEVANCE, 2, 6, {W, C}},
+        {RB_BVH_SCORE_RELEVANCE, 102, 6, {C, W}},
+        /* both over their share: both coarser; what is left (2) cannot make one whole (3) */
+        {RB_BVH_SCORE_RELEVANCE, 2, 4, {C, C}},
+        {RB_BVH_SCORE_RELEVANCE, 102, 1, {O, C}},
+        {RB_BVH_SCORE_RELEVANCE, 2, 8, {W, W}},   /* everything fits: everything whole */
+        {RB_BVH_SCORE_RELEVANCE, 102, 0, {W, W}}, /* no budget */
+        {RB_BVH_SCORE_AREA, 102, 6, {W, C}},
+        {RB_BVH_SCORE_AREA, 102, 4, {W, O}},
+        {RB_BVH_SCORE_AREA, 102, 1, {C, O}},
+        {RB_BVH_SCORE_AREA, 2, 8, {W, W}},
+    };
+    for (size_t c = 0; c < COUNT(cases); c++) {
+        struct rb_bvh_desc desc = {.mesh = &m,
+                                   .objects = objects,
+                                   .object_count = 2,
+                                   .triangle_budget = cases[c].budget,
+                                   .score = cases[c].score,
+                                   .eye = {cases[c].eye_x, 0.5f, 3.0f}};
+        uint8_t choice[2] = {0xff, 0xff};
+        struct rb_err err = RB_ERR_INIT;
+        assert_int_equal(rb_bvh_select(&desc, choice, &err), RB_OK);
+        print_message("# %s, eye at x %g, budget %llu: %u %u\n",
+                      cases[c].score == RB_BVH_SCORE_AREA ? "area" : "relevance", cases[c].eye_x,
+                      (unsigned long long)cases[c].budget, choice[0], choice[1]);
+        assert_memory_equal(choice, cases[c].want, 2);
+        /* the build holds what the selection chose */
+        struct rb_bvh bvh;
+        build(&desc, &bvh);
+        assert_memory_equal(bvh.choice, choice, 2);
+        uint32_t want_tris = 0;
+        for (uint32_t o = 0; o < 2; o++)
+            want_tris += choice[o] == W ? 4 : choice[o] == C ? 1 : 0;
+        assert_int_equal(bvh.triangle_count, want_tris);
         rb_bvh_release(&bvh);
     }
 }
@@ -464,6 +532,36 @@ static void test_threads(void **state)
     uint32_t *idx;
     struct rb_bvh_mesh m = grid_mesh(120, 3000, &pos, &idx);
     expect_same_build(&(struct rb_bvh_desc){.mesh = &m}, "grid");
+    free(idx);
+    free(pos);
+}
+
+/* The hybrid's thread cancels a build it no longer wants: a set flag stops it with
+ * RB_E_INTERRUPTED and *out untouched; a clear one changes nothing. */
+static void test_cancel(void **state)
+{
+    (void)state;
+    float *pos;
+    uint32_t *idx;
+    struct rb_bvh_mesh m = grid_mesh(120, 0, &pos, &idx);
+    atomic_bool cancel;
+    atomic_init(&cancel, true);
+    struct rb_bvh out = {.node_count = 12345}, plain, flagged;
+    struct rb_err err = RB_ERR_INIT;
+    assert_int_equal(rb_bvh_build(&(struct rb_bvh_desc){.mesh = &m, .cancel = &cancel}, &out, &err),
+                     RB_E_INTERRUPTED);
+    print_message("# a set flag: %s\n", err.msg);
+    assert_non_null(strstr(err.msg, "cancelled"));
+    assert_int_equal(out.node_count, 12345);
+    atomic_store(&cancel, false);
+    build(&(struct rb_bvh_desc){.mesh = &m}, &plain);
+    build(&(struct rb_bvh_desc){.mesh = &m, .cancel = &cancel}, &flagged);
+    assert_int_equal(plain.node_count, flagged.node_count);
+    assert_memory_equal(plain.nodes, flagged.nodes, plain.node_count * sizeof(*plain.nodes));
+    assert_memory_equal(plain.triangles, flagged.triangles,
+                        plain.triangle_count * sizeof(*plain.triangles));
+    rb_bvh_release(&plain);
+    rb_bvh_release(&flagged);
     free(idx);
     free(pos);
 }
@@ -824,7 +922,9 @@ int main(void)
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_budget),
         cmocka_unit_test(test_lod),
+        cmocka_unit_test(test_relevance),
         cmocka_unit_test(test_threads),
+        cmocka_unit_test(test_cancel),
         cmocka_unit_test(test_threads_scene),
         cmocka_unit_test(test_scenes_against_embree),
     };
