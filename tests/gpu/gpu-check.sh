@@ -6,7 +6,8 @@
 # kit tests/gpu/kit.sh made (default: .gpu-kit in the repository), on the first device of
 # `raybundle info` whose type is not CPU (or --device):
 #   setup        unpack the tarball and the validation layer, find a Vulkan loader and driver
-#   validate     the demo and the Cornell box with direct, bdpt, hybrid and reference under
+#   validate     the demo, the Cornell box and (where the kit has it) the blended-material
+#                scene with direct, bdpt, hybrid and reference under
 #                --validate, at 1920x1080, frames 0-2 (the reference at 8 spp on every core)
 #   compare      the same jobs at the kit's size and frame against the kit's lavapipe frames
 #   determinism  the demo rendered twice and as two chunks, every EXR compared byte for byte
@@ -86,7 +87,11 @@ else
     : "${budget:=420}"
 fi
 integrators="direct bdpt hybrid"
+# The demo and the Cornell box; and the blended-material scene (the transparency pass) where the
+# kit has it (tests/tools/blendscene, kits from kit.sh since it draws one).
 scenes="demo cornell"
+[ -f "$kit/jobs/blend.yaml" ] && scenes="$scenes blend"
+scene_list=$(echo "$scenes" | sed 's/\([^ ]*\)/"\1"/g; s/ /, /g')
 
 R() { python3 "$report" "$@"; }
 t_start=$(date +%s.%N)
@@ -98,7 +103,7 @@ quote() { printf '%q ' "$@" | sed 's/ $//'; }
 settings=$(
     cat <<EOF
 {"validate": {"size": "$v_size", "frames": "$v_frames", "spp": $spp, "threads": $threads,
-              "scenes": ["demo", "cornell"], "integrators": ["direct", "bdpt", "hybrid", "reference"]},
+              "scenes": [$scene_list], "integrators": ["direct", "bdpt", "hybrid", "reference"]},
  "determinism": {"scene": "demo", "size": "$d_size", "frames": "$d_frames", "chunks": 2,
                  "integrators": ["direct", "bdpt", "hybrid"]},
  "bench": {"scene": "demo", "sizes": [$(echo "$b_sizes" | sed 's/\([^ ]*\)/"\1"/g; s/ /, /g')], "runs": $b_runs,

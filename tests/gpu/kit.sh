@@ -10,7 +10,9 @@
 #   KITDIR/hostlibs/                         what the NVIDIA driver's Vulkan library needs beside
 #                                            the driver (libGLdispatch of libglvnd0, libX11, ...),
 #                                            exposed there only if the host lacks them
-#   KITDIR/scenes/, KITDIR/jobs/             the demo room and the Cornell box, with their jobs
+#   KITDIR/scenes/, KITDIR/jobs/             the demo room, the Cornell box and the blended-material
+#                                            scene of tests/tools/blendscene (built in BUILD,
+#                                            default build, when it is not there), with their jobs
 #   KITDIR/lavapipe/SCENE-INTEGRATOR/        the tarball's own frames on lavapipe (beauty only, at
 #                                            the comparison size), the GPU's frames are held to
 #   KITDIR/kit.json                          what is in the kit, and the comparison's settings
@@ -46,7 +48,7 @@ done
 # the same job, frame and size.
 compare_size=640x360
 compare_frame=2
-compare_scenes="demo cornell"
+compare_scenes="demo cornell blend"
 compare_integrators="direct bdpt hybrid"
 
 layer_so=/usr/lib/x86_64-linux-gnu/libVkLayer_khronos_validation.so
@@ -142,6 +144,22 @@ camera: {fov_y_deg: 39.3, keys: [{t: 0, position: [-278, 273, 800], look_at: [-2
 default_light: on
 integrator: {name: bdpt}
 EOF
+
+# The blended-material scene (alphaMode BLEND quads over an opaque floor and wall: the
+# transparency pass), written by the repository's own tool.
+blendscene="$repo/${BUILD:-build}/tests/tools/blendscene"
+if [ ! -x "$blendscene" ]; then
+    make -C "$repo" -s "${BUILD:-build}/tests/tools/blendscene" >&2 ||
+        die "cannot build $blendscene"
+fi
+mkdir -p "$kit/scenes/blend" "$work/blend"
+"$blendscene" scene "$work/blend" >/dev/null || die "$blendscene scene failed"
+cp "$work/blend/blend.gltf" "$work/blend/alpha.png" "$kit/scenes/blend/" ||
+    die "cannot copy the blended scene"
+sed -e 's|^scene: .*|scene: ../scenes/blend/blend.gltf|' -e 's|^output: .*|output: frame.####.exr|' \
+    -e 's|^frames: .*|frames: {start: 0, end: 9, rate: 24}|' "$work/blend/blend.yaml" >"$kit/jobs/blend.yaml"
+grep -q '^scene: ../scenes/blend/blend.gltf$' "$kit/jobs/blend.yaml" ||
+    die "the blended scene's job has no scene: line"
 
 # The lavapipe frames: beauty only, at the comparison size, one frame (bdpt and hybrid warm
 # their caches up before it).

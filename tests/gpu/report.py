@@ -343,7 +343,7 @@ def tables(doc):
     steps = {s["id"]: s for s in doc["steps"]}
     st = doc.get("settings", {})
     t = {"validate": {}, "compare": {}, "determinism": {}, "bench": {}}
-    for sc in ("demo", "cornell"):
+    for sc in st.get("validate", {}).get("scenes", ["demo", "cornell"]):
         t["validate"][sc] = {ig: (steps.get("validate/%s/%s" % (sc, ig)) or {}).get("status")
                              for ig in ("direct", "bdpt", "hybrid", "reference")}
         t["compare"][sc] = {}
@@ -468,8 +468,8 @@ def markdown(doc):
         L.append("")
 
     integ_v = ["direct", "bdpt", "hybrid", "reference"]
-    scenes = ["demo", "cornell"]
     v = st.get("validate", {})
+    scenes = v.get("scenes", ["demo", "cornell"])
     L.append("## Validation")
     L.append("")
     L.append("Under the Khronos validation layer (`--validate`, synchronization validation on; any "

@@ -44,7 +44,8 @@ else
 fi
 for f in kit.json layer/libVkLayer_khronos_validation.so.xz layer/VkLayer_khronos_validation.json \
     vulkan/libvulkan.so.1 jobs/demo.yaml jobs/cornell.yaml scenes/cornell-box/CornellBox.glb \
-    scenes/demo/room.gltf lavapipe/demo-bdpt/frame.0002.exr lavapipe/cornell-hybrid/frame.0002.exr; do
+    scenes/demo/room.gltf lavapipe/demo-bdpt/frame.0002.exr lavapipe/cornell-hybrid/frame.0002.exr \
+    jobs/blend.yaml scenes/blend/blend.gltf scenes/blend/alpha.png lavapipe/blend-direct/frame.0002.exr; do
     check "the kit holds $f" test -s "$T/kit/$f"
 done
 
@@ -86,7 +87,7 @@ need("libvulkan.so.1" in d["host"].get("loader", ""), "loader %s" % d["host"].ge
 need(d["host"].get("glibc"), "no glibc version")
 need(d["host"].get("uname"), "no uname")
 need("validation layer: available" in d["raybundle"].get("info", ""), "info: no validation layer")
-for sc in ("demo", "cornell"):
+for sc in ("demo", "cornell", "blend"):
     for ig in ("direct", "bdpt", "hybrid", "reference"):
         f = steps.get("validate/%s/%s" % (sc, ig), {}).get("figures", {})
         need(f.get("frames") == 2 and f.get("nonfinite") == 0 and f.get("wall_ms_median", 0) > 0,
@@ -126,9 +127,10 @@ check "gpu-check.md says done with 0 failed" grep -q 'State: \*\*done\*\*.* 0 fa
 for h in '## Validation' '## Against lavapipe' '## Determinism' '## GPU time per pass' '### 320x180' '### 640x360'; do
     check "gpu-check.md has '$h'" grep -qF "$h" "$md"
 done
-check "gpu-check.md: 8 validation cells passed" test "$(grep -E '^\| (demo|cornell) \| pass, ' "$md" | grep -o 'pass, ' | wc -l)" = 8
-check "gpu-check.md: 6 comparisons, relMSE 0 against the same driver" \
-    test "$(grep -cE '^\| (demo|cornell) \| (direct|bdpt|hybrid) \| 0 \| 0 \| 0 \| inf \|.*\| pass \|$' "$md")" = 6
+check "gpu-check.md: 12 validation cells passed (demo, Cornell box, blended scene)" \
+    test "$(grep -E '^\| (demo|cornell|blend) \| pass, ' "$md" | grep -o 'pass, ' | wc -l)" = 12
+check "gpu-check.md: 9 comparisons, relMSE 0 against the same driver" \
+    test "$(grep -cE '^\| (demo|cornell|blend) \| (direct|bdpt|hybrid) \| 0 \| 0 \| 0 \| inf \|.*\| pass \|$' "$md")" = 9
 check "gpu-check.md: 3 integrators with the same bits twice and in chunks" \
     test "$(grep -cE '^\| (direct|bdpt|hybrid) \| same bits \| same bits \| [0-9]+ \|$' "$md")" = 3
 check "gpu-check.md: a GPU total for each integrator at both sizes" \
