@@ -901,8 +901,11 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
     if ((st = rb_render_flush(r, &err)) ||
         (rc == RB_EXIT_OK && (st = rb_io_output_lock_check(lock, &err)))) {
         st = removed_first(lock, st, &err);
-        cmd_error("%s", err.msg);
-        rc = exit_for(st, true);
+        /* A write failure the loop stopped on is the writer's still: said once. */
+        if (rc == RB_EXIT_OK || strcmp(err.msg, cmd_last_error) != 0)
+            cmd_error("%s", err.msg);
+        if (rc == RB_EXIT_OK)
+            rc = exit_for(st, true);
     }
     signal(SIGINT, SIG_DFL);
     signal(SIGTERM, SIG_DFL);
