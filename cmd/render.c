@@ -730,12 +730,13 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
         rc = exit_for(st, false);
         goto out;
     }
-    if ((st = rb_scene_load(job->scene_path, o->is_lenient ? RB_SCENE_LOAD_LENIENT : 0, &scene,
-                            &err)) ||
-        (job->environment.map &&
-         (st = rb_render_load_env(job->environment.map, job->environment.intensity, &env, &env_w,
-                                  &env_h, &err))) ||
-        (st = rb_scene_setup_init(job, scene, env, env_w, env_h, &setup, &err))) {
+    st = rb_scene_load(job->scene_path, o->is_lenient ? RB_SCENE_LOAD_LENIENT : 0, &scene, &err);
+    if (!st && job->environment.map &&
+        (st = rb_render_load_env(job->environment.map, job->environment.intensity, &env, &env_w,
+                                 &env_h, &err)) &&
+        job->at.environment_map)
+        rb_err_prefix(&err, "%s", job->at.environment_map); /* the job's line that names it */
+    if (st || (st = rb_scene_setup_init(job, scene, env, env_w, env_h, &setup, &err))) {
         cmd_error("%s", err.msg);
         rc = exit_for(st, false);
         goto out;
