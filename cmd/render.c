@@ -720,12 +720,15 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
     }
     if (o->preview)
         job->color.preview = true;
-    /* A view or display the config lacks fails now, with the names it has, not at the first
-     * frame's preview after a frame's work. */
+    /* A view or display the config lacks, or a transform that does not build, fails now, not
+     * at the first frame's preview after a frame's work; a config the job names is said at
+     * its key. */
     if (job->color.preview && !o->is_timing_only &&
         (st = rb_io_color_check(
              &(struct rb_io_color_desc){job->color.config, job->color.display, job->color.view},
              &err))) {
+        if (st != RB_E_INVALID && job->at.color_config)
+            rb_err_prefix(&err, "%s", job->at.color_config);
         cmd_error("%s", err.msg);
         rc = exit_for(st, false);
         goto out;

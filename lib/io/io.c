@@ -1084,6 +1084,22 @@ out:
     return st;
 }
 
+/* The display and view's transform built and applied to one pixel, as every preview will be:
+ * what loads only then (a LUT file the config names, a transform OpenColorIO cannot build)
+ * fails here, before any frame, rather than after the first frame was written. */
+static enum rb_status color_probe(const char *config, const struct rb_io_color_desc *desc,
+                                  struct rb_err *err)
+{
+    float rgba[4] = {0.18f, 0.18f, 0.18f, 1.0f};
+    char msg[480];
+    int r =
+        rb_ocio_display_view_apply(config, desc ? desc->display : NULL, desc ? desc->view : NULL,
+                                   rgba, 1, 1, NULL, NULL, 0, msg, sizeof(msg));
+    if (r != RB_OCIO_OK)
+        return rb_errf(err, r == RB_OCIO_NO_NAME ? RB_E_INVALID : RB_E_EXTERNAL, "%s", msg);
+    return RB_OK;
+}
+
 enum rb_status rb_io_color_check(const struct rb_io_color_desc *desc, struct rb_err *err)
 {
     const char *config = desc && desc->config && *desc->config ? desc->config : NULL;
@@ -1101,14 +1117,14 @@ enum rb_status rb_io_color_check(const struct rb_io_color_desc *desc, struct rb_
         return rb_errf(err, r == RB_OCIO_NO_NAME ? RB_E_INVALID : RB_E_EXTERNAL, "%s", msg);
     const char *view = desc ? desc->view : NULL;
     if (!view || !*view)
-        return RB_OK; /* the display's default, which the config has */
+        return color_probe(config, desc, err); /* the display's default, which the config has */
     char list[1024] = "";
     struct rb_suggest near;
     rb_suggest_init(&near, view);
     for (char *p = names, *nl; (nl = strchr(p, '\n')); p = nl + 1) {
         size_t len = (size_t)(nl - p);
         if (len == strlen(view) && strncmp(p, view, len) == 0)
-            return RB_OK;
+            return color_probe(config, desc, err);
         rb_suggest_offer(&near, p, len);
         size_t used = strlen(list);
         snprintf(list + used, sizeof(list) - used, "%s'%.*s'", used ? ", " : "", (int)len, p);
