@@ -40,4 +40,15 @@ stderr_has "frame 2: cannot write '$T/b/frame.0002.timing.json': the disk is ful
     "the sidecar's error says so and names it"
 errors_once "a failure of the last frame, met only when the run ends, is said once too"
 
+# Standard output behind a full disk: the command fails instead of losing its output.
+"$RB" --version >/dev/full 2>"$T/stderr"
+status=$?
+expect_exit 1 "--version into a full disk exits 1"
+stderr_has "raybundle: error: cannot write to standard output: the disk is full" "and says so"
+"$RB" render jobs/demo.yaml --out "$T/c" --frames 0 $args -q >/dev/full 2>"$T/stderr"
+status=$?
+expect_exit 1 "a render whose summary meets a full disk exits 1"
+errors_once "it says so once"
+stderr_has "cannot write to standard output" "naming standard output"
+
 done_testing
