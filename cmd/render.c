@@ -791,7 +791,10 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
                                                         .user = &prog},
                                &r, &err))) {
         cmd_error("%s", err.msg);
-        rc = st == RB_E_UNSUPPORTED || st == RB_E_INVALID ? RB_EXIT_USAGE : exit_for(st, true);
+        /* A job the renderer cannot take is a bad job (2); a scene or frame past a limit of the
+         * device or the integrator (RB_E_UNSUPPORTED: lights, buffer ranges) is one the device
+         * cannot render (1), which another device or integrator may. */
+        rc = st == RB_E_INVALID ? RB_EXIT_USAGE : exit_for(st, true);
         goto out;
     }
     char path[4096];
