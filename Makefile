@@ -152,10 +152,12 @@ $(BUILD)/tests/fuzz/%: tests/fuzz/%.c tests/fuzz/replay.c $(BUILD)/libraybundle.
 
 # The same replays under ASan and UBSan (gcc or clang), also in make check: any report aborts the
 # replay and fails t0090. Only what the targets call (core, job, scene, io/timing.c's JSON
-# readers) is compiled again, into $(BUILD)/asan at -O1 (fast to compile, still quick to run), so
-# the main build is untouched and the extra time stays small.
+# readers, the analysis' sequence scan and bench sets) is compiled again, into $(BUILD)/asan at
+# -O1 (fast to compile, still quick to run), so the main build is untouched and the extra time
+# stays small.
 FUZZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -O1
-FUZZ_SAN_SRC := $(filter lib/core/% lib/job/% lib/scene/% lib/io/timing.c,$(LIB_C) $(LIB_CXX))
+FUZZ_SAN_SRC := $(filter lib/core/% lib/job/% lib/scene/% lib/io/timing.c lib/analysis/sequence.c \
+	lib/analysis/timing.c,$(LIB_C) $(LIB_CXX))
 FUZZ_SAN_OBJ := $(patsubst %,$(BUILD)/asan/%.o,$(basename $(FUZZ_SAN_SRC)))
 FUZZ_SAN_BIN := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/asan/tests/fuzz/%)
 FUZZ_SAN_LIBS = $(shell $(PKG_CONFIG) --libs yaml-0.1 tinygltf libxxhash jansson 2>/dev/null) \

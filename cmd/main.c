@@ -1,6 +1,7 @@
 /* raybundle: the command table, the dispatcher and `raybundle help`. */
 #include "cmd.h"
 
+#include <errno.h>
 #include <getopt.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -282,6 +283,24 @@ int cmd_help(int argc, char **argv)
     return RB_EXIT_OK;
 }
 
+/* What a command printed reaches its reader, or the run fails: a full disk behind standard
+ * output is an error (exit 1 where the command had succeeded), as git's and coreutils'
+ * close_stdout make it, not a table lost in silence. */
+static int finish_stdout(int rc)
+{
+    errno = 0;
+    if (fflush(stdout) == 0 && !ferror(stdout))
+        return rc;
+    int e = errno;
+    if (e == ENOSPC)
+        cmd_error("cannot write to standard output: the disk is full (%s)", strerror(e));
+    else if (e)
+        cmd_error("cannot write to standard output: %s", strerror(e));
+    else /* an earlier write failed, and its errno is gone */
+        cmd_error("cannot write to standard output: a write failed and output was lost");
+    return rc == RB_EXIT_OK ? RB_EXIT_FAILED : rc;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -290,13 +309,13 @@ int main(int argc, char **argv)
     }
     if (strcmp(argv[1], "--version") == 0 || strcmp(argv[1], "version") == 0) {
         printf("raybundle %s\n", RB_VERSION);
-        return RB_EXIT_OK;
+        return finish_stdout(RB_EXIT_OK);
     }
     if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0)
-        return cmd_help(1, argv);
+        return finish_stdout(cmd_help(1, argv));
     for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++)
         if (strcmp(argv[1], commands[i].name) == 0)
-            return commands[i].fn(argc - 1, argv + 1);
+            return finish_stdout(commands[i].fn(argc - 1, argv + 1));
     char hint[96];
     suggest_command(argv[1], hint, sizeof(hint));
     cmd_error("unknown command '%s'%s", argv[1], hint);

@@ -720,22 +720,26 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
     }
     if (o->preview)
         job->color.preview = true;
-    /* A view or display the config lacks fails now, with the names it has, not at the first
-     * frame's preview after a frame's work. */
+    /* A view or display the config lacks, or a transform that does not build, fails now, not
+     * at the first frame's preview after a frame's work; a config the job names is said at
+     * its key. */
     if (job->color.preview && !o->is_timing_only &&
         (st = rb_io_color_check(
              &(struct rb_io_color_desc){job->color.config, job->color.display, job->color.view},
              &err))) {
+        if (st != RB_E_INVALID && job->at.color_config)
+            rb_err_prefix(&err, "%s", job->at.color_config);
         cmd_error("%s", err.msg);
         rc = exit_for(st, false);
         goto out;
     }
-    if ((st = rb_scene_load(job->scene_path, o->is_lenient ? RB_SCENE_LOAD_LENIENT : 0, &scene,
-                            &err)) ||
-        (job->environment.map &&
-         (st = rb_render_load_env(job->environment.map, job->environment.intensity, &env, &env_w,
-                                  &env_h, &err))) ||
-        (st = rb_scene_setup_init(job, scene, env, env_w, env_h, &setup, &err))) {
+    st = rb_scene_load(job->scene_path, o->is_lenient ? RB_SCENE_LOAD_LENIENT : 0, &scene, &err);
+    if (!st && job->environment.map &&
+        (st = rb_render_load_env(job->environment.map, job->environment.intensity, &env, &env_w,
+                                 &env_h, &err)) &&
+        job->at.environment_map)
+        rb_err_prefix(&err, "%s", job->at.environment_map); /* the job's line that names it */
+    if (st || (st = rb_scene_setup_init(job, scene, env, env_w, env_h, &setup, &err))) {
         cmd_error("%s", err.msg);
         rc = exit_for(st, false);
         goto out;
@@ -787,7 +791,10 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
                                                         .user = &prog},
                                &r, &err))) {
         cmd_error("%s", err.msg);
-        rc = st == RB_E_UNSUPPORTED || st == RB_E_INVALID ? RB_EXIT_USAGE : exit_for(st, true);
+        /* A job the renderer cannot take is a bad job (2); a scene or frame past a limit of the
+         * device or the integrator (RB_E_UNSUPPORTED: lights, buffer ranges) is one the device
+         * cannot render (1), which another device or integrator may. */
+        rc = st == RB_E_INVALID ? RB_EXIT_USAGE : exit_for(st, true);
         goto out;
     }
     char path[4096];
@@ -901,8 +908,11 @@ static int render_job(struct options *o, struct cmd_bench_run *bench)
     if ((st = rb_render_flush(r, &err)) ||
         (rc == RB_EXIT_OK && (st = rb_io_output_lock_check(lock, &err)))) {
         st = removed_first(lock, st, &err);
-        cmd_error("%s", err.msg);
-        rc = exit_for(st, true);
+        /* A write failure the loop stopped on is the writer's still: said once. */
+        if (rc == RB_EXIT_OK || strcmp(err.msg, cmd_last_error) != 0)
+            cmd_error("%s", err.msg);
+        if (rc == RB_EXIT_OK)
+            rc = exit_for(st, true);
     }
     signal(SIGINT, SIG_DFL);
     signal(SIGTERM, SIG_DFL);

@@ -291,7 +291,7 @@ enum rb_status rb_analysis_timing_compare_sets(const struct rb_analysis_timing_s
                                                struct rb_analysis_timing_row **rows,
                                                size_t *row_count, struct rb_err *err);
 
-/* ---- sequences (report.c) --------------------------------------------------------------- */
+/* ---- sequences (sequence.c) ------------------------------------------------------------- */
 
 /* A frame sequence, as raybundle render and reference write one into a directory: STEM.NNNN.exr,
  * each beside its STEM.NNNN.timing.json and, where the integrator keeps hit ratios, its

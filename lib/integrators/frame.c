@@ -523,8 +523,10 @@ static enum rb_status check_limits(const struct rb_gpu *gpu, const struct rb_sce
         st = rb_gpu_check_storage_range(gpu, bound[i].pass, bound[i].name, bound[i].bytes, err);
     if (st == RB_OK)
         st = rb_gpu_check_dispatch(gpu, "animate", (most_vertices + 63) / 64, 1, 1, err);
-    if (st)
-        rb_err_prefix(err, "scene '%s'", scene->path ? scene->path : "?");
+    if (st) /* the vertices as the loader keeps them: flat-shaded triangles unshared */
+        rb_err_prefix(err, "scene '%s' (%u vertices, %llu as posed)",
+                      scene->path ? scene->path : "?", scene->vertex_count,
+                      (unsigned long long)world_vertices);
     return st;
 }
 
@@ -720,8 +722,11 @@ enum rb_status rb_moment_evaluate(const struct rb_job *job, const struct rb_scen
                                          m->lights + at, RB_MAX_LIGHTS - at);
     }
     if (total > RB_MAX_LIGHTS)
-        return rb_errf(err, RB_E_UNSUPPORTED, "%u lights; at most %d are supported", total,
-                       RB_MAX_LIGHTS);
+        return rb_errf(err, RB_E_UNSUPPORTED,
+                       "%s%s%u lights (the job's %zu, the scene's and the emissive surfaces' "
+                       "samples): the %s integrator takes at most %d (the reference any number)",
+                       RB_JOB_AT(job->at.lights), total, job->light_count,
+                       rb_integrator_name(job->integrator.name), RB_MAX_LIGHTS);
     m->light_count = total;
     return RB_OK;
 }

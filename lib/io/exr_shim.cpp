@@ -17,6 +17,7 @@
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
 #include <ImfTestFile.h>
+#include <IexErrnoExc.h>
 #include <ImfVecAttribute.h>
 #include <OpenEXRConfig.h>
 
@@ -162,6 +163,12 @@ extern "C" int rb_exr_write(const struct rb_exr_write_desc *d, char *msg, size_t
         out.setFrameBuffer(fb);
         out.writePixels(int(d->height_px));
         return RB_EXR_OK;
+    } catch (const IEX_NAMESPACE::EnospcExc &e) {
+        fail(msg, msg_size, e.what());
+        return RB_EXR_NOSPACE;
+    } catch (const IEX_NAMESPACE::EdquotExc &e) {
+        fail(msg, msg_size, e.what());
+        return RB_EXR_NOQUOTA;
     } catch (const std::exception &e) {
         return fail(msg, msg_size, e.what());
     } catch (...) {

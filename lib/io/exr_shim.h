@@ -19,6 +19,8 @@ extern "C" {
 /* Shim results: 0 is success; a failure fills msg with OpenEXR's text (or the exception's). */
 #define RB_EXR_OK 0
 #define RB_EXR_FAIL 1
+#define RB_EXR_NOSPACE 2 /* a write failed with ENOSPC (the disk is full) */
+#define RB_EXR_NOQUOTA 3 /* a write failed with EDQUOT */
 
 enum rb_exr_attr_type {
     RB_EXR_ATTR_STRING = 1,

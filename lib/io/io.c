@@ -319,6 +319,25 @@ enum rb_status rb_io_output_lock_check(const struct rb_io_output_lock *lock, str
     return RB_OK;
 }
 
+/* "cannot write 'path': why" for the errno e; a full disk or quota said in words, with the
+ * folder whose disk it is. */
+static enum rb_status write_error(const char *path, int e, struct rb_err *err)
+{
+    char dir[PATH_MAX];
+    dirname_of(path, dir, sizeof(dir));
+    if (e == ENOSPC)
+        return rb_errf(err, RB_E_IO,
+                       "cannot write '%s': the disk is full (no space left on the device that "
+                       "holds '%s')",
+                       path, dir);
+    if (e == EDQUOT)
+        return rb_errf(err, RB_E_IO,
+                       "cannot write '%s': the disk quota is used up (on the device that holds "
+                       "'%s')",
+                       path, dir);
+    return rb_errf(err, RB_E_IO, "cannot write '%s': %s", path, strerror(e));
+}
+
 /* "<path>.tmp.<pid><ext>": beside path, so the final rename stays on one file system. */
 static char *temp_path(const char *path, const char *ext)
 {
@@ -388,7 +407,7 @@ fail:
     if (fd >= 0)
         close(fd);
     unlink(tmp);
-    st = rb_errf(err, RB_E_IO, "cannot write '%s': %s", path, strerror(e));
+    st = write_error(path, e, err);
 out:
     free(tmp);
     return st;
@@ -404,15 +423,20 @@ static enum rb_status write_exr_atomic(const char *path, struct rb_exr_write_des
     if (!tmp)
         return rb_errf(err, RB_E_NOMEM, "cannot write '%s': out of memory", path);
     desc->path = tmp;
-    if (rb_exr_write(desc, msg, sizeof(msg)) != RB_EXR_OK) {
+    int r = rb_exr_write(desc, msg, sizeof(msg));
+    if (r != RB_EXR_OK) {
         unlink(tmp);
-        st = rb_errf(err, RB_E_EXTERNAL, "cannot write '%s': %s", path, msg);
+        /* OpenEXR's text names the temporary file: a full disk is said of the frame's. */
+        if (r == RB_EXR_NOSPACE || r == RB_EXR_NOQUOTA)
+            st = write_error(path, r == RB_EXR_NOSPACE ? ENOSPC : EDQUOT, err);
+        else
+            st = rb_errf(err, RB_E_EXTERNAL, "cannot write '%s': %s", path, msg);
         goto out;
     }
     if (fsync_path(tmp) != 0 || rename(tmp, path) != 0) {
         int e = errno;
         unlink(tmp);
-        st = rb_errf(err, RB_E_IO, "cannot write '%s': %s", path, strerror(e));
+        st = write_error(path, e, err);
         goto out;
     }
 out:
@@ -1060,6 +1084,22 @@ out:
     return st;
 }
 
+/* The display and view's transform built and applied to one pixel, as every preview will be:
+ * what loads only then (a LUT file the config names, a transform OpenColorIO cannot build)
+ * fails here, before any frame, rather than after the first frame was written. */
+static enum rb_status color_probe(const char *config, const struct rb_io_color_desc *desc,
+                                  struct rb_err *err)
+{
+    float rgba[4] = {0.18f, 0.18f, 0.18f, 1.0f};
+    char msg[480];
+    int r =
+        rb_ocio_display_view_apply(config, desc ? desc->display : NULL, desc ? desc->view : NULL,
+                                   rgba, 1, 1, NULL, NULL, 0, msg, sizeof(msg));
+    if (r != RB_OCIO_OK)
+        return rb_errf(err, r == RB_OCIO_NO_NAME ? RB_E_INVALID : RB_E_EXTERNAL, "%s", msg);
+    return RB_OK;
+}
+
 enum rb_status rb_io_color_check(const struct rb_io_color_desc *desc, struct rb_err *err)
 {
     const char *config = desc && desc->config && *desc->config ? desc->config : NULL;
@@ -1077,14 +1117,14 @@ enum rb_status rb_io_color_check(const struct rb_io_color_desc *desc, struct rb_
         return rb_errf(err, r == RB_OCIO_NO_NAME ? RB_E_INVALID : RB_E_EXTERNAL, "%s", msg);
     const char *view = desc ? desc->view : NULL;
     if (!view || !*view)
-        return RB_OK; /* the display's default, which the config has */
+        return color_probe(config, desc, err); /* the display's default, which the config has */
     char list[1024] = "";
     struct rb_suggest near;
     rb_suggest_init(&near, view);
     for (char *p = names, *nl; (nl = strchr(p, '\n')); p = nl + 1) {
         size_t len = (size_t)(nl - p);
         if (len == strlen(view) && strncmp(p, view, len) == 0)
-            return RB_OK;
+            return color_probe(config, desc, err);
         rb_suggest_offer(&near, p, len);
         size_t used = strlen(list);
         snprintf(list + used, sizeof(list) - used, "%s'%.*s'", used ? ", " : "", (int)len, p);

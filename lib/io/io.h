@@ -161,9 +161,10 @@ struct rb_io_color_desc {
 
 /* Converts scene-linear Rec.709 RGBA (width*height*4 floats) through the config's view
  * transform and writes an 8-bit sRGB PNG atomically. */
-/* Checks before any frame that desc's config loads and has its display and view: RB_E_INVALID
- * for a name it lacks, listing the config's names and the nearest one ("did you mean"),
- * RB_E_IO or RB_E_EXTERNAL for a config that does not load. */
+/* Checks before any frame that desc's config loads, has its display and view, and that their
+ * transform builds and applies (the files it names found): RB_E_INVALID for a name it lacks,
+ * listing the config's names and the nearest one ("did you mean"), RB_E_IO or RB_E_EXTERNAL for
+ * a config that does not load or a transform that does not build. */
 enum rb_status rb_io_color_check(const struct rb_io_color_desc *desc, struct rb_err *err);
 enum rb_status rb_io_preview_write(const char *path, uint32_t width_px, uint32_t height_px,
                                    const float *rgba, const struct rb_io_color_desc *desc,

@@ -1166,6 +1166,34 @@ static enum rb_status check_light(struct ctx *c, void *items, size_t i, const ch
     return RB_OK;
 }
 
+/* A mark as messages print it ("job.yaml:12:5", "--set:2:8", the option), allocated; NULL for
+ * a key that was not set or has no position, and when out of memory (the message loses its
+ * position, nothing else). */
+static char *mark_text(const struct mark *m)
+{
+    if (!m->seq || !m->src)
+        return NULL;
+    size_t n = strlen(m->src) + 48;
+    char *s = malloc(n);
+    if (s && m->line == 0)
+        snprintf(s, n, "%s", m->src);
+    else if (s)
+        snprintf(s, n, "%s:%zu:%zu", m->src, m->line, m->col);
+    return s;
+}
+
+/* Keeps where the keys that the scene or the disk check later were set (struct rb_job's at). */
+static void keep_marks(struct ctx *c)
+{
+    const struct mark *m = c->marks;
+    struct rb_job *job = c->job;
+    job->at.camera_node = mark_text(&m[key_index("camera.node")]);
+    job->at.animation_clips = mark_text(&m[key_index("animation.clips")]);
+    job->at.lights = mark_text(&m[key_index("lights")]);
+    job->at.environment_map = mark_text(&m[key_index("environment.map")]);
+    job->at.color_config = mark_text(&m[key_index("color.config")]);
+}
+
 /* The checks that span keys, and files that must exist; run after the overrides. */
 static enum rb_status validate(struct ctx *c)
 {
@@ -1491,6 +1519,7 @@ enum rb_status rb_job_parse(const char *name, const char *text, size_t size, con
         goto out;
     if ((st = validate(&c)))
         goto out;
+    keep_marks(&c);
     rb_job_rehash(c.job);
     *out = c.job;
     c.job = NULL;
@@ -1546,6 +1575,7 @@ static enum rb_status quick_look(const char *path, const struct rb_job_override 
         goto out;
     if ((st = validate(&c)))
         goto out;
+    keep_marks(&c);
     rb_job_rehash(c.job);
     *out = c.job;
     c.job = NULL;
@@ -1598,6 +1628,11 @@ void rb_job_destroy(struct rb_job *job)
     free(job->color.config);
     free(job->color.display);
     free(job->color.view);
+    free(job->at.camera_node);
+    free(job->at.animation_clips);
+    free(job->at.lights);
+    free(job->at.environment_map);
+    free(job->at.color_config);
     free(job);
 }
 

@@ -223,10 +223,21 @@ struct rb_job {
         bool preview;  /* write NAME.####.png beside each EXR */
     } color;
 
+    /* Where the keys that later stages check against the scene or the disk were set, for
+     * their messages: "job.yaml:12:5", "--set:2:8" or the option ("--integrator 'x'"); NULL
+     * where the job does not set the key (its default, or a quick look). RB_JOB_AT prints one. */
+    struct {
+        char *camera_node, *animation_clips, *lights, *environment_map, *color_config;
+    } at;
+
     uint64_t hash; /* of every setting that changes pixels: the scene's path, not its contents
                     * (struct rb_scene_setup's job_hash adds those); the named integrator's
                     * settings only; not the frame range or output */
 };
+
+/* A message's prefix for a key's position (struct rb_job's at): printf arguments for "%s%s",
+ * "job.yaml:12:5: " or "" where there is none. */
+#define RB_JOB_AT(where) (where) ? (where) : "", (where) ? ": " : ""
 
 /* One `--set key.path=value` override, applied after the file is parsed. */
 struct rb_job_override {

@@ -207,9 +207,11 @@ enum rb_status rb_camera_evaluate(const struct rb_job *job, const struct rb_scen
     if (job->camera.node) {
         uint32_t i = rb_scene_find_node(scene, job->camera.node);
         if (i == NONE)
-            return rb_errf(err, RB_E_INVALID, "camera node '%s' not found", job->camera.node);
+            return rb_errf(err, RB_E_INVALID, "%s%scamera node '%s' not found in the scene",
+                           RB_JOB_AT(job->at.camera_node), job->camera.node);
         if (scene->nodes[i].camera == NONE || scene->nodes[i].camera >= scene->camera_count)
-            return rb_errf(err, RB_E_INVALID, "node '%s' has no camera", job->camera.node);
+            return rb_errf(err, RB_E_INVALID, "%s%scamera node '%s' has no camera",
+                           RB_JOB_AT(job->at.camera_node), job->camera.node);
         node_camera(job, scene, setup, pose, i, out);
         return RB_OK;
     }

@@ -279,6 +279,37 @@ bool json_span(const std::vector<unsigned char> &data, bool binary, const char *
     return true;
 }
 
+// What is wrong with a GLB's header, said of its field, where tinygltf would say only "Invalid
+// glTF binary." (or "Invalid magic."): the 12-byte header (magic, version, length) and the JSON
+// chunk's 8-byte header (length, type). "" when tinygltf accepts them; the version is scene.c's.
+std::string glb_header_problem(const std::vector<unsigned char> &d)
+{
+    uint64_t size = d.size();
+    if (size < 20)
+        return "a GLB starts with a 12-byte header and the JSON chunk's 8-byte header, and the "
+               "file has " +
+               std::to_string(size) + " bytes";
+    if (std::memcmp(d.data(), "glTF", 4) != 0)
+        return "the file does not start with the GLB magic 'glTF'";
+    uint64_t length = le32(&d[8]), json_length = le32(&d[12]), type = le32(&d[16]);
+    if (length > size)
+        return "the header's length (bytes 8 to 11) is " + std::to_string(length) +
+               " bytes, and the file has " + std::to_string(size);
+    if (json_length < 1)
+        return "the JSON chunk's length (bytes 12 to 15) is 0";
+    if (20 + json_length > length)
+        return "the JSON chunk's length (bytes 12 to 15) is " + std::to_string(json_length) +
+               " bytes, past the end of the GLB (" + std::to_string(length) +
+               " bytes, the header's length)";
+    if (type != 0x4E4F534Au) {
+        char hex[16];
+        std::snprintf(hex, sizeof(hex), "0x%08X", static_cast<unsigned>(type));
+        return std::string("the first chunk's type (bytes 16 to 19) is ") + hex +
+               ", not JSON (0x4E4F534A)";
+    }
+    return std::string();
+}
+
 // ---- tinygltf's complaints ----------------------------------------------------------------
 
 // Lines of tinygltf 2.7's error text about files that glTF 2.0 allows: a skin without
@@ -836,6 +867,74 @@ bool fs_write(std::string *, const std::string &, const std::vector<unsigned cha
     return false; // raybundle never writes glTF
 }
 
+// stb_image's limits, which tinygltf's decoder (built into Debian's libtinygltf) applies: at
+// most 2^24 pixels a side, 2^30 bytes of pixels as the file stores them (width x height x
+// channels), and 2^31 bytes once expanded to RGBA (twice as many for 16 bits a channel).
+constexpr uint64_t STB_MAX_SIDE = 1u << 24;
+constexpr uint64_t STB_MAX_STORED = 1u << 30;
+constexpr uint64_t STB_MAX_RGBA = INT_MAX;
+
+uint32_t be32(const unsigned char *p)
+{
+    return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
+}
+
+// A byte count in powers of 1000 to three figures: "6.4 GB", "1.07 GB", "512 kB".
+std::string bytes_text(uint64_t n)
+{
+    static const char *const units[] = {"bytes", "kB", "MB", "GB", "TB"};
+    double v = static_cast<double>(n);
+    int u = 0;
+    while (v >= 1000.0 && u < 4) {
+        v /= 1000.0;
+        u++;
+    }
+    char buf[32];
+    std::snprintf(buf, sizeof(buf), u ? "%.3g %s" : "%.0f %s", v, units[u]);
+    return buf;
+}
+
+// Why a PNG that failed to decode is too large for stb_image ("" when its header is within the
+// limits, or it is no PNG): its size from the IHDR chunk, and the limit it passes.
+std::string png_too_large(const unsigned char *bytes, int size)
+{
+    static const unsigned char magic[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    if (size < 33 || std::memcmp(bytes, magic, 8) != 0 || std::memcmp(bytes + 12, "IHDR", 4) != 0)
+        return std::string();
+    uint64_t w = be32(bytes + 16), h = be32(bytes + 20);
+    unsigned depth = bytes[24], type = bytes[25];
+    uint64_t channels = type == 2 ? 3 : type == 4 ? 2 : type == 6 ? 4 : 1;
+    uint64_t rgba = w * h * 4 * (depth == 16 ? 2 : 1);
+    std::string size_text = std::to_string(w) + " x " + std::to_string(h) + " pixels";
+    if (w > STB_MAX_SIDE || h > STB_MAX_SIDE)
+        return "the PNG is " + size_text + ", too large: the decoder takes at most " +
+               std::to_string(STB_MAX_SIDE) + " pixels a side";
+    if (w * h * channels > STB_MAX_STORED)
+        return "the PNG is " + size_text + " of " + std::to_string(channels) + " channel" +
+               (channels == 1 ? "" : "s") + " (" + bytes_text(w * h * channels) +
+               "), too large: the decoder takes at most " + bytes_text(STB_MAX_STORED) +
+               " (width x height x channels)";
+    if (rgba > STB_MAX_RGBA)
+        return "the PNG is " + size_text + " (" + bytes_text(rgba) +
+               " as RGBA), too large: the decoder takes at most " + bytes_text(STB_MAX_RGBA);
+    return std::string();
+}
+
+// tinygltf's own image decoder, with a PNG that is only too large said so (stb_image calls that
+// "Unknown image format"). user is passed on: nullptr, tinygltf's default options.
+bool load_image(tinygltf::Image *image, const int index, std::string *err, std::string *warn,
+                int req_width, int req_height, const unsigned char *bytes, int size, void *user)
+{
+    std::string before = err ? *err : std::string();
+    if (tinygltf::LoadImageData(image, index, err, warn, req_width, req_height, bytes, size, user))
+        return true;
+    std::string why = png_too_large(bytes, size);
+    if (err && !why.empty())
+        *err = before + "image " + std::to_string(index) +
+               (image->name.empty() ? std::string() : " '" + image->name + "'") + ": " + why + "\n";
+    return false;
+}
+
 // The directory tinygltf resolves external buffers and images against, as its *FromFile do.
 std::string base_dir(const std::string &path)
 {
@@ -885,18 +984,29 @@ extern "C" enum rb_status rb_gltf_shim_check(const char *text, size_t size,
 extern "C" enum rb_status rb_gltf_shim_load(const char *path, const struct rb_gltf_check *check,
                                             struct rb_gltf_doc **out, struct rb_err *err) noexcept
 {
+    // What the load was doing, for a failed allocation's message.
+    const char *stage = "reading the file";
+    uint64_t file_bytes = 0;
     try {
         std::vector<unsigned char> data;
         // tinygltf takes an unsigned int size: larger files are refused unread.
         enum rb_status st = read_file(path, UINT_MAX, data, err);
         if (st)
             return st;
+        file_bytes = data.size();
+        stage = "checking its JSON";
         // Sniff the magic: a .gltf may hold binary glTF and vice versa.
         bool binary = (data.size() >= 4 && std::memcmp(data.data(), "glTF", 4) == 0) ||
                       ends_with(path, ".glb");
 
         // The nesting first, then the types: tinygltf would skip what does not match. JSON
         // that does not parse, or is no object, is left to tinygltf's own message.
+        if (binary) {
+            std::string why = glb_header_problem(data);
+            if (!why.empty())
+                return rb_errf(err, RB_E_PARSE, "cannot load '%s': invalid GLB: %s", path,
+                               why.c_str());
+        }
         const char *text = nullptr;
         size_t text_size = 0;
         std::string base = base_dir(path);
@@ -916,10 +1026,12 @@ extern "C" enum rb_status rb_gltf_shim_load(const char *path, const struct rb_gl
             }
         }
 
+        stage = "parsing it and decoding its buffers and images";
         std::unique_ptr<Doc> d(new Doc());
         tinygltf::TinyGLTF loader;
         tinygltf::FsCallbacks fs = {fs_exists, fs_expand, fs_read, fs_write, &files};
         loader.SetFsCallbacks(fs);
+        loader.SetImageLoader(load_image, nullptr); // no option: tinygltf's default, RGBA
         std::string terr, twarn;
         static const unsigned char empty[1] = {0};
         const unsigned char *bytes = data.empty() ? empty : data.data();
@@ -937,6 +1049,7 @@ extern "C" enum rb_status rb_gltf_shim_load(const char *path, const struct rb_gl
         // chunk): they go to the caller as errors, apart from the few about valid files.
         d->warnings = join_lines(twarn, "\n");
         sort_errors(terr, &d->errors, &d->warnings);
+        stage = "copying its arrays";
         mirror(*d);
         if (binary && data.size() >= 12)
             d->pub.glb_version = le32(&data[4]);
@@ -944,7 +1057,15 @@ extern "C" enum rb_status rb_gltf_shim_load(const char *path, const struct rb_gl
         *out = &d.release()->pub;
         return RB_OK;
     } catch (const std::bad_alloc &) {
-        return rb_errf(err, RB_E_NOMEM, "cannot load '%s': out of memory", path);
+        struct stat sb;
+        if (!file_bytes && ::stat(path, &sb) == 0)
+            file_bytes = static_cast<uint64_t>(sb.st_size);
+        try {
+            return rb_errf(err, RB_E_NOMEM, "cannot load '%s' (%s): out of memory %s", path,
+                           bytes_text(file_bytes).c_str(), stage);
+        } catch (...) {
+            return rb_errf(err, RB_E_NOMEM, "cannot load '%s': out of memory %s", path, stage);
+        }
     } catch (const std::exception &e) {
         return rb_errf(err, RB_E_EXTERNAL, "cannot load '%s': %s", path, e.what());
     } catch (...) {

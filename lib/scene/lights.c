@@ -220,8 +220,8 @@ enum rb_status rb_scene_select_clips(const struct rb_scene *scene, const struct 
         return RB_OK;
     }
     if (job->animation.clip_count > cap)
-        return rb_errf(err, RB_E_OVERFLOW, "%zu animation clips selected; at most %u can play",
-                       job->animation.clip_count, cap);
+        return rb_errf(err, RB_E_OVERFLOW, "%s%s%zu animation clips selected; at most %u can play",
+                       RB_JOB_AT(job->at.animation_clips), job->animation.clip_count, cap);
     for (size_t i = 0; i < job->animation.clip_count; i++) {
         const char *name = job->animation.clips[i];
         uint32_t a = rb_scene_find_animation(scene, name);
@@ -235,8 +235,9 @@ enum rb_status rb_scene_select_clips(const struct rb_scene *scene, const struct 
                             : snprintf(list + len, sizeof(list) - len, "%s#%u", k ? ", " : "", k);
                 len += w > 0 ? (size_t)w : 0;
             }
-            return rb_errf(err, RB_E_INVALID, "animation clip '%s' not found (scene has: %s)",
-                           name ? name : "", scene->animation_count ? list : "none");
+            return rb_errf(err, RB_E_INVALID, "%s%sanimation clip '%s' not found (scene has: %s)",
+                           RB_JOB_AT(job->at.animation_clips), name ? name : "",
+                           scene->animation_count ? list : "none");
         }
         out[i] = a;
     }

@@ -15,4 +15,5 @@ check "the job parser's fuzz target was built" test -x "$BUILD/tests/fuzz/fuzz_j
 check "the job parser's sanitized replay was built" test -x "$BUILD/asan/tests/fuzz/fuzz_job"
 check "the glTF loader's sanitized replay was built" test -x "$BUILD/asan/tests/fuzz/fuzz_scene"
 check "the timing readers' sanitized replay was built" test -x "$BUILD/asan/tests/fuzz/fuzz_timing"
+check "the sequence readers' sanitized replay was built" test -x "$BUILD/asan/tests/fuzz/fuzz_sequence"
 done_testing

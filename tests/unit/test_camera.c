@@ -235,11 +235,18 @@ static void test_node_camera_errors(void **state)
     f.job.camera.node = "Nope";
     assert_int_equal(rb_camera_evaluate(&f.job, &f.s, &f.setup, &f.pose, 0, &c, &err),
                      RB_E_INVALID);
-    assert_string_equal(err.msg, "camera node 'Nope' not found");
+    assert_string_equal(err.msg, "camera node 'Nope' not found in the scene");
     f.job.camera.node = "Box";
     assert_int_equal(rb_camera_evaluate(&f.job, &f.s, &f.setup, &f.pose, 0, &c, &err),
                      RB_E_INVALID);
-    assert_string_equal(err.msg, "node 'Box' has no camera");
+    assert_string_equal(err.msg, "camera node 'Box' has no camera");
+    /* Where the job set the key, the message starts there. */
+    char at[] = "shot.yaml:7:11";
+    f.job.at.camera_node = at;
+    assert_int_equal(rb_camera_evaluate(&f.job, &f.s, &f.setup, &f.pose, 0, &c, &err),
+                     RB_E_INVALID);
+    assert_string_equal(err.msg, "shot.yaml:7:11: camera node 'Box' has no camera");
+    f.job.at.camera_node = NULL;
 }
 
 /* Every corner of the bounds lies inside the view frustum and between the clip planes. */

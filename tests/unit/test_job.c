@@ -500,6 +500,33 @@ static void test_override_errors(void **state)
 
 /* ---- quick look at a glTF ------------------------------------------------------------------ */
 
+/* Where the keys that the scene or the disk check later were set, kept for their messages. */
+static void test_key_positions(void **state)
+{
+    (void)state;
+    const char *text = "scene: empty.gltf\n"
+                       "camera: {node: Cam}\n"
+                       "animation:\n"
+                       "  clips: [Run, Walk]\n"
+                       "lights: [{type: point}]\n";
+    struct rb_job_override set[] = {{"environment.map", "sky.hdr", NULL},
+                                    {"color.config", "test.ocio", "--ocio 'test.ocio'"}};
+    struct rb_job *job = must_parse(text, set, 2);
+    assert_string_equal(job->at.camera_node, "job.yaml:2:16");
+    assert_string_equal(job->at.animation_clips, "job.yaml:4:10");
+    assert_string_equal(job->at.lights, "job.yaml:5:9");
+    assert_string_equal(job->at.environment_map, "--set:1:17");
+    assert_string_equal(job->at.color_config, "--ocio 'test.ocio'");
+    rb_job_destroy(job);
+    job = must_parse("scene: empty.gltf\n", NULL, 0); /* keys left at their defaults */
+    assert_null(job->at.camera_node);
+    assert_null(job->at.animation_clips);
+    assert_null(job->at.lights);
+    assert_null(job->at.environment_map);
+    assert_null(job->at.color_config);
+    rb_job_destroy(job);
+}
+
 static void test_quick_look(void **state)
 {
     (void)state;
@@ -766,6 +793,7 @@ int main(void)
         cmocka_unit_test(test_error_camera),
         cmocka_unit_test(test_overrides),
         cmocka_unit_test(test_override_errors),
+        cmocka_unit_test(test_key_positions),
         cmocka_unit_test(test_quick_look),
         cmocka_unit_test(test_hash),
         cmocka_unit_test(test_integrator_names),
