@@ -264,8 +264,10 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
                               err)) ||
         (st =
              rb_frame_buffer(gpu, sample_bytes, STORAGE, true, "bdpt.samples", &b->samples, err)) ||
-        (st = rb_frame_buffer(gpu, RB_MAX_LIGHTS * sizeof(struct rb_gpu_bdpt_light), STORAGE, true,
-                              "bdpt.lights", &b->lights, err)) ||
+        (st = rb_frame_buffer(gpu,
+                              (it->cur.light_capacity ? it->cur.light_capacity : 1) *
+                                  sizeof(struct rb_gpu_bdpt_light),
+                              STORAGE, true, "bdpt.lights", &b->lights, err)) ||
         (st = rb_frame_buffer(gpu, all * sizeof(struct rb_gpu_vpl), STORAGE, false, "bdpt.vpls",
                               &b->vpls, err)) ||
         (st = rb_frame_buffer(gpu, all * sizeof(struct rb_gpu_view), STORAGE, false,
@@ -487,33 +489,43 @@ static float luminance(const float c[3])
  * and its sampling densities: a point light's sphere, a spot light's cone, a directional
  * light's beam across its shadow map's square. Lights without a shadow map get no VPLs (the
  * bundles' side lights them). Generate weighs the sum, set in b, against the emitters'. */
+/* Light l's emitted power as VPLs see it (0 without a shadow map: gl, its GPU record), and
+ * its sampling density and spot cosine. */
+static double light_power(const struct rb_world_light *l, const struct rb_gpu_light *gl, float beam,
+                          float *density, float *cos_outer)
+{
+    float lum = luminance(l->color);
+    *cos_outer = 0.0f;
+    if (l->type == RB_LIGHT_DIRECTIONAL) {
+        *density = 1.0f / (beam * beam);
+    } else if (l->type == RB_LIGHT_SPOT) {
+        *cos_outer = cosf(l->outer_cone_rad);
+        *density = 1.0f / (2.0f * (float)RB_PI * (1.0f - *cos_outer));
+    } else {
+        *density = 1.0f / (4.0f * (float)RB_PI);
+    }
+    return gl->color[3] >= 0.0f && lum > 0.0f ? lum / *density : 0.0;
+}
+
 static void write_lights(const struct rb_integrator *it, struct rb_bdpt_frame *b,
                          const struct rb_moment *m)
 {
     struct rb_gpu_bdpt_light *out = b->lights.mapped;
     const struct rb_gpu_light *gl = it->frame.lights.mapped;
-    double power[RB_MAX_LIGHTS], total = 0.0;
+    double total = 0.0;
     float beam = 2.0f * b->scene_radius; /* write_shadow_views' box: 2 radius across */
     for (uint32_t i = 0; i < m->light_count; i++) {
-        const struct rb_world_light *l = &m->lights[i];
-        float lum = luminance(l->color), density, cos_outer = 0.0f;
-        if (l->type == RB_LIGHT_DIRECTIONAL) {
-            density = 1.0f / (beam * beam);
-        } else if (l->type == RB_LIGHT_SPOT) {
-            cos_outer = cosf(l->outer_cone_rad);
-            density = 1.0f / (2.0f * (float)RB_PI * (1.0f - cos_outer));
-        } else {
-            density = 1.0f / (4.0f * (float)RB_PI);
-        }
-        power[i] = gl[i].color[3] >= 0.0f && lum > 0.0f ? lum / density : 0.0;
-        total += power[i];
+        float density, cos_outer;
+        total += light_power(&m->lights[i], &gl[i], beam, &density, &cos_outer);
         out[i] = (struct rb_gpu_bdpt_light){.choice = {0.0f, 0.0f, density, cos_outer}};
     }
     b->punctual_power = (float)total;
     double cdf = 0.0;
     for (uint32_t i = 0; i < m->light_count && total > 0.0; i++) {
-        cdf += power[i];
-        out[i].choice[0] = (float)(power[i] / total);
+        float density, cos_outer;
+        double power = light_power(&m->lights[i], &gl[i], beam, &density, &cos_outer);
+        cdf += power;
+        out[i].choice[0] = (float)(power / total);
         out[i].choice[1] = cdf >= total ? 1.0f : (float)(cdf / total);
     }
 }

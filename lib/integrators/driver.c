@@ -77,7 +77,9 @@ enum rb_status rb_integrator_create_with(const struct rb_integrator_desc *desc,
         .loop = desc->job->animation.loop,
     };
     if ((st = rb_scene_pose_create(desc->scene, &it->cur.pose, err)) ||
-        (st = rb_scene_pose_create(desc->scene, &it->prev.pose, err)))
+        (st = rb_scene_pose_create(desc->scene, &it->prev.pose, err)) ||
+        (st = rb_moment_lights_init(desc->job, desc->scene, &it->cur, err)) ||
+        (st = rb_moment_lights_init(desc->job, desc->scene, &it->prev, err)))
         goto fail;
     double t0 = desc->job->frame_start / desc->job->rate_fps;
     if ((st = rb_moment_evaluate(desc->job, desc->scene, &it->sel, t0, &it->cur, err)) ||
@@ -238,6 +240,8 @@ void rb_integrator_destroy(struct rb_integrator *it)
     rb_frame_release(it->gpu, &it->frame);
     rb_scene_pose_destroy(it->prev.pose);
     rb_scene_pose_destroy(it->cur.pose);
+    free(it->prev.lights);
+    free(it->cur.lights);
     free(it->groups);
     free(it->clips);
     free(it);

@@ -605,8 +605,9 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
         frame->shadow_layer_count += need;
     }
     uint32_t shadow_size = job->integrator.direct.shadow_size_px;
-    st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_light) * RB_MAX_LIGHTS,
-                         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "lights", &frame->lights, err);
+    st = rb_frame_buffer(
+        gpu, sizeof(struct rb_gpu_light) * (first->light_capacity ? first->light_capacity : 1),
+        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "lights", &frame->lights, err);
     if (st == RB_OK)
         st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_shadow_view) * RB_MAX_SHADOW_LAYERS,
                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "shadow views",
@@ -715,19 +716,32 @@ enum rb_status rb_moment_evaluate(const struct rb_job *job, const struct rb_scen
     enum rb_status st = rb_camera_evaluate(job, scene, m->setup, m->pose, time_s, &m->camera, err);
     if (st)
         return st;
-    uint32_t total = rb_scene_world_lights(job, scene, m->setup, m->pose, m->lights, RB_MAX_LIGHTS);
+    uint32_t cap = m->light_capacity;
+    uint32_t total = rb_scene_world_lights(job, scene, m->setup, m->pose, m->lights, cap);
     if (m->has_emitter_lights) {
-        uint32_t at = total < RB_MAX_LIGHTS ? total : RB_MAX_LIGHTS;
+        uint32_t at = total < cap ? total : cap;
         total += rb_scene_emitter_lights(scene, m->pose, job->integrator.direct.emitter_lights,
-                                         m->lights + at, RB_MAX_LIGHTS - at);
+                                         m->lights + at, cap - at);
     }
-    if (total > RB_MAX_LIGHTS)
-        return rb_errf(err, RB_E_UNSUPPORTED,
-                       "%s%s%u lights (the job's %zu, the scene's and the emissive surfaces' "
-                       "samples): the %s integrator takes at most %d (the reference any number)",
-                       RB_JOB_AT(job->at.lights), total, job->light_count,
-                       rb_integrator_name(job->integrator.name), RB_MAX_LIGHTS);
+    if (total > cap)
+        RB_BUG("%u lights in a moment made for %u", total, cap);
     m->light_count = total;
+    return RB_OK;
+}
+
+enum rb_status rb_moment_lights_init(const struct rb_job *job, const struct rb_scene *scene,
+                                     struct rb_moment *m, struct rb_err *err)
+{
+    uint64_t cap = rb_scene_world_lights(job, scene, m->setup, m->pose, NULL, 0);
+    if (m->has_emitter_lights)
+        cap += job->integrator.direct.emitter_lights;
+    if (cap > UINT32_MAX / sizeof(struct rb_gpu_light))
+        return rb_errf(err, RB_E_UNSUPPORTED, "%s%s%llu lights: more than a light buffer holds",
+                       RB_JOB_AT(job->at.lights), (unsigned long long)cap);
+    free(m->lights);
+    if (!(m->lights = calloc(cap ? cap : 1, sizeof(*m->lights))))
+        return rb_errf(err, RB_E_NOMEM, "out of memory for %llu lights", (unsigned long long)cap);
+    m->light_capacity = (uint32_t)cap;
     return RB_OK;
 }
 

@@ -10,7 +10,6 @@
 #include "job/job.h"
 #include "scene/scene.h"
 
-#define RB_MAX_LIGHTS 64
 /* Room for the direct integrator's emitter samples (RB_SCENE_EMITTER_LIGHTS_MAX cubes of 6) beside
  * two point lights' cubes and a few spot or directional lights. */
 #define RB_MAX_SHADOW_LAYERS 64

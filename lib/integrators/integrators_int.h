@@ -13,8 +13,8 @@ struct rb_moment {
     const struct rb_scene_setup *setup; /* the job's, borrowed from the integrator */
     struct rb_scene_pose *pose;
     struct rb_camera camera;
-    struct rb_world_light lights[RB_MAX_LIGHTS];
-    uint32_t light_count;
+    struct rb_world_light *lights; /* light_capacity of them (rb_moment_lights_init) */
+    uint32_t light_count, light_capacity;
     bool has_emitter_lights; /* the emitters' point samples follow the lights (the ops' flag) */
 };
 
@@ -110,6 +110,11 @@ void rb_frame_release(struct rb_gpu *gpu, struct rb_frame *frame);
 bool rb_frame_has_blended(const struct rb_scene *scene);
 
 /* Evaluates animation, camera and lights at time_s. */
+/* Allocates m->lights for every light a moment of the job can have: the job's, the scene's and,
+ * with m->has_emitter_lights, the emitters' point samples (their count is fixed by the job).
+ * m->pose must exist. */
+enum rb_status rb_moment_lights_init(const struct rb_job *job, const struct rb_scene *scene,
+                                     struct rb_moment *m, struct rb_err *err);
 enum rb_status rb_moment_evaluate(const struct rb_job *job, const struct rb_scene *scene,
                                   const struct rb_anim_selection *sel, double time_s,
                                   struct rb_moment *m, struct rb_err *err);
