@@ -1,7 +1,8 @@
 // hybrid_bvh: the queued rays through the BVH (seed 003: traverse the BVH later, in a compute
 // shader: the default device has no ray queries). A hit is shaded as a screen hit is: its
-// material at the hit (textures and normal map, at their full resolution), its emission as the camera vertex's direct
-// light, the punctual lights' shadow-mapped light and the triangle's baked light of the
+// material at the hit (textures and normal map, at their full resolution), its emission as the
+// camera vertex's direct light (weighed by MIS against hybrid_light's samples, with the pdf the
+// ray carries), the punctual lights' shadow-mapped light and the triangle's baked light of the
 // emitters and the environment as the bounce; a miss takes the environment.
 // Both faces of every surface are hit and shaded and emit, as the reference's bounce rays find
 // them; only double-sided materials have their back's light baked.
@@ -50,6 +51,8 @@ void main()
     rb_surface sf = rb_material_eval(m, uv, srgb_textures, linear_textures);
     vec3 p = o + hit.t * d;
     vec3 direct = weight * sf.emission;
+    if (max(direct.r, max(direct.g, direct.b)) > 0.0)
+        direct *= rb_hybrid_emit_weight(t, d, hit.t, s.b.w);
     vec3 baked = rb_hybrid_baked(hit.extra, hit.bary, !front);
     vec3 lit = weight * rb_hybrid_shade(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90, sf.roughness, baked);
     slots[slot].a = vec4(direct, uintBitsToFloat(RB_HYBRID_BVH));

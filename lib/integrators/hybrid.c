@@ -1,12 +1,21 @@
 /* The hybrid integrator: deferred path tracing, seed 003 (DESIGN.md "hybrid"). Its frame:
  *   animate -> gbuffer -> shadow -> direct -> hiz -> diffuse_rays -> specular_rays -> ray_queue
- *   -> bvh_rays -> accumulate -> tiles -> diffuse_filter -> specular_filter -> output
+ *   -> bvh_rays -> light_rays -> accumulate -> tiles -> diffuse_filter -> specular_filter ->
+ *   output
  * Rasterize what can be rasterized (the G-buffer, shadow maps), sample each lobe of the BRDF at
  * every pixel that still wants samples, trace in screen space first and through a BVH (built on
  * the CPU with Embree's builder, lib/bvh, from the objects of best score under a triangle budget,
  * an object that does not fit whole by a coarser version) what the screen cannot answer, shade
  * both kinds of hit alike, accumulate over time and filter with a kernel that shrinks as samples
  * grow.
+ *
+ * Next-event estimation at the camera vertex. Each ray a lobe traces also takes one light
+ * sample (light_rays): an emissive triangle by emitted power (the emitter table, built on the
+ * device each frame from the frame's vertices), a point uniformly on it, visibility by a shadow
+ * ray through the BVH. A BRDF ray that finds an emitter, in screen space or in the BVH, and the
+ * light sample are weighed by the power heuristic (beta 2, the reference's), per lobe: each lobe
+ * is its own integral, sampled by its own rays (pdf rb_hybrid_pdf) and by the light samples.
+ * The environment has no light sample: the BRDF rays that miss find it, weight 1.
  *
  * History. Two accumulators take every sample; accumulator A starts again on the frames
  * sequence_start + kW, B on sequence_start + kW + W/2 (and both on sequence_start), W =
@@ -61,6 +70,10 @@ struct hybrid {
     uint32_t bake_capacity;
     uint32_t word_vec4s; /* the bake words' room, in vec4s (0 without a bake) */
     bool has_bake;
+    /* next-event estimation: the emissive triangles (global indices), after the triangles in
+     * the device's index buffer */
+    uint32_t *emitters;
+    uint32_t emitter_count;
 };
 
 static uint32_t history_frames(const struct rb_job *job)
@@ -96,6 +109,7 @@ static void destroy(struct rb_integrator *it, void *state)
     free(d->built);
     free(d->indices);
     free(d->objects);
+    free(d->emitters);
     free(d);
 }
 
@@ -220,13 +234,13 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
         {"hierarchical depth", cells * 2 * sizeof(float)},
         {"ray slots", h->slot_count * sizeof(struct rb_gpu_hybrid_slot)},
         {"ray queue", (uint64_t)d->queue_capacity * sizeof(uint32_t)},
-        {"queue blocks", blocks * sizeof(uint32_t)},
+        {"queue blocks and emitter table", (blocks + d->emitter_count) * sizeof(uint32_t)},
         {"BVH nodes", (uint64_t)d->node_capacity * sizeof(struct rb_gpu_bvh_node)},
         {"BVH triangles and baked light",
          (uint64_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle) +
              ((uint64_t)d->word_vec4s + d->bake_capacity) * 16},
         {"noise tiles", 2 * tiles * sizeof(float)},
-        {"triangles", all_triangles(d) * 3 * sizeof(uint32_t)},
+        {"triangles and emitters", (all_triangles(d) * 3 + d->emitter_count) * sizeof(uint32_t)},
     };
     enum rb_status st;
     for (size_t i = 0; i < COUNT(bound); i++)
@@ -252,7 +266,9 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
         (st = rb_frame_buffer(gpu, bound[7].bytes ? bound[7].bytes : 4, storage, true,
                               "hybrid.indices", &h->indices, err)))
         return st;
-    memcpy(h->indices.mapped, d->indices, bound[7].bytes);
+    memcpy(h->indices.mapped, d->indices, all_triangles(d) * 3 * sizeof(uint32_t));
+    memcpy((uint32_t *)h->indices.mapped + all_triangles(d) * 3, d->emitters,
+           (size_t)d->emitter_count * sizeof(uint32_t));
     const VkImageUsageFlags image_use = VK_IMAGE_USAGE_STORAGE_BIT;
     static const char *const acc_names[2] = {"hybrid.acc0", "hybrid.acc1"};
     static const char *const light_names[RB_BDPT_LIGHT_COUNT] = {
@@ -341,6 +357,34 @@ static enum rb_status bake_init(struct rb_integrator *it, struct hybrid *d, stru
     return st;
 }
 
+/* The emitter table's triangles (hybrid_shared.h): those of every instance whose material's
+ * emissive factor is not black, as the reference and bdpt list them. */
+static enum rb_status emitters_init(struct rb_integrator *it, struct hybrid *d, struct rb_err *err)
+{
+    const struct rb_scene *scene = it->scene;
+    const struct rb_scene_pose *pose = it->cur.pose;
+    uint64_t count = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        count = 0;
+        for (uint32_t i = 0; i < d->object_count; i++) {
+            uint32_t m = scene->primitives[pose->instances[i].primitive].material;
+            const float *e = m < scene->material_count ? scene->materials[m].emissive : NULL;
+            if (!e || !(e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f))
+                continue;
+            for (uint32_t k = 0; k < d->objects[i].triangle_count; k++, count++)
+                if (pass)
+                    d->emitters[count] = d->objects[i].first_triangle + k;
+        }
+        if (pass || !count)
+            break;
+        if (count > UINT32_MAX / 8 || !(d->emitters = malloc((size_t)count * sizeof(*d->emitters))))
+            return rb_errf(err, RB_E_NOMEM, "out of memory for %llu emissive triangles",
+                           (unsigned long long)count);
+    }
+    d->emitter_count = (uint32_t)count;
+    return RB_OK;
+}
+
 static enum rb_status create(struct rb_integrator *it, void **state, struct rb_err *err)
 {
     struct hybrid *d = calloc(1, sizeof(*d));
@@ -351,8 +395,8 @@ static enum rb_status create(struct rb_integrator *it, void **state, struct rb_e
     enum rb_status st;
     if ((st = rb_base_create(it, &d->base, err)) ||
         (st = rb_pass_hybrid_create(it->gpu, &d->passes, err)) ||
-        (st = geometry_init(it, d, err)) || (st = bake_init(it, d, err)) ||
-        (st = create_resources(it, d, err))) {
+        (st = geometry_init(it, d, err)) || (st = emitters_init(it, d, err)) ||
+        (st = bake_init(it, d, err)) || (st = create_resources(it, d, err))) {
         destroy(it, d);
         return st;
     }
@@ -592,8 +636,11 @@ static void set_push(const struct rb_integrator *it, struct hybrid *d, int frame
         .params = {s->noise, s->thickness, s->filter_depth, s->filter_normal},
         .scene = {sqrtf(dx * dx + dy * dy + dz * dz), 1e-4f, 0.0f, s->check_screen ? 1.0f : 0.0f},
         /* the G-buffer's float holds a triangle's index exactly below 2^24 */
-        .bake = {d->has_bake, d->triangle_count <= (1u << 24), 12 * d->tri_capacity, 0},
+        .bake = {d->has_bake, d->triangle_count <= (1u << 24), 12 * d->tri_capacity,
+                 d->emitter_count},
     };
+    uint32_t emitters_at = (uint32_t)(all_triangles(d) * 3);
+    memcpy(&p->scene[2], &emitters_at, sizeof(emitters_at));
     d->h.cur = (uint32_t)frame & 1u;
 }
 

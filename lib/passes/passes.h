@@ -463,10 +463,12 @@ void rb_pass_hybrid_destroy(struct rb_pass_hybrid *p);
  * the first RB_HYBRID_PASS_TILES + 1 of them in a warm-up). */
 enum rb_hybrid_pass {
     RB_HYBRID_PASS_HIZ = 0,         /* the hierarchical depth buffer, level by level */
-    RB_HYBRID_PASS_DIFFUSE_RAYS,    /* zeroes the counters; requests, screen trace, screen hits */
+    RB_HYBRID_PASS_DIFFUSE_RAYS,    /* zeroes the counters; the emitter table; requests, screen
+                                     * trace, screen hits */
     RB_HYBRID_PASS_SPECULAR_RAYS,   /* the same for the specular lobe */
     RB_HYBRID_PASS_RAY_QUEUE,       /* the rays for the BVH, in slot order (three dispatches) */
     RB_HYBRID_PASS_BVH_RAYS,        /* the queued rays through the BVH (indirect dispatch) */
+    RB_HYBRID_PASS_LIGHT_RAYS,      /* a light sample per traced ray (next-event estimation) */
     RB_HYBRID_PASS_ACCUMULATE,      /* both accumulators */
     RB_HYBRID_PASS_TILES,           /* the tile mask, then its erosion */
     RB_HYBRID_PASS_DIFFUSE_FILTER,  /* the diffuse lobe's light for the output pass */

@@ -123,6 +123,18 @@ vec2 rb_hybrid_u(uint k, ivec2 px, uint lobe)
     return vec2(r >> 8) * (1.0 / 16777216.0);
 }
 
+// The three random numbers of light sample k of a pixel's lobe: point k of the R3 sequence
+// (Roberts' recurrence on the root of x^4 = x + 1), rotated by the pixel's own shift as
+// rb_hybrid_u is, in 32-bit fixed point: the emitter's pick (z) stays independent of the point
+// on it (xy), which two rotations of one 2D sequence would not be.
+vec3 rb_hybrid_u3(uint k, ivec2 px, uint lobe)
+{
+    uint h = rb_hash(uint(px.y) * 0x9e3779b9u ^ rb_hash(uint(px.x) + 0x632be5abu * (lobe + 1u)));
+    uvec3 r = uvec3(k * 3518319154u + h, k * 2882110344u + rb_hash(h),
+                    k * 2360945575u + rb_hash(h ^ 0x5bd1e995u));
+    return vec3(r >> 8) * (1.0 / 16777216.0);
+}
+
 // An orthonormal frame around n (Duff et al. 2017).
 void rb_basis(vec3 n, out vec3 t, out vec3 b)
 {
@@ -192,6 +204,80 @@ bool rb_hybrid_sample(uint lobe, vec3 n, vec3 ng, vec3 v, vec3 f0, float f90, fl
         weight = F * (4.0 * V * ndv * ndl / rb_g1(ndv, alpha)) / rb_spec_map(f0);
     }
     return dot(ng, l) > 0.0 && dot(n, l) > 0.0;
+}
+
+// The lobe's pdf (solid angle) of sampling direction l with rb_hybrid_sample: cos / pi for the
+// diffuse lobe, GGX's visible normals' G1(v) D / (4 n.v) for the specular one. The MIS weights
+// of a BRDF ray and of a light sample both use it, so they add up to one.
+float rb_hybrid_pdf(uint lobe, vec3 n, vec3 v, vec3 l, float roughness)
+{
+    float ndl = dot(n, l);
+    if (!(ndl > 0.0))
+        return 0.0;
+    if (lobe == RB_HYBRID_DIFFUSE)
+        return ndl / RB_PI;
+    vec3 lv = l + v;
+    if (!(dot(lv, lv) > 0.0))
+        return 0.0;
+    vec3 h = normalize(lv);
+    float alpha = max(roughness * roughness, 1e-4), a2 = alpha * alpha;
+    float ndh = max(dot(n, h), 0.0);
+    float dd = ndh * ndh * (a2 - 1.0) + 1.0;
+    float ndv = max(dot(n, v), 1e-4);
+    return rb_g1(ndv, alpha) * (a2 / (RB_PI * dd * dd)) / (4.0 * ndv);
+}
+
+// The power heuristic (beta = 2, as the reference's) of a technique with pdf a against one with
+// pdf b, as a ratio so that a mirror's huge pdf neither overflows nor makes NaN.
+float rb_hybrid_mis(float a, float b)
+{
+    a = min(a, 1e30);
+    b = min(b, 1e30);
+    if (!(a > 0.0))
+        return 0.0;
+    float r = b / a;
+    return 1.0 / (1.0 + r * r);
+}
+
+// The emitter table (hybrid_shared.h): where its running sums start in `blocks`, its total.
+uint rb_hybrid_cdf_base()
+{
+    return (2u * pc.frame.w + RB_HYBRID_QUEUE_GROUP - 1u) / RB_HYBRID_QUEUE_GROUP;
+}
+
+float rb_hybrid_emit_total()
+{
+    return pc.bake.w == 0u ? 0.0 : uintBitsToFloat(blocks[rb_hybrid_cdf_base() + pc.bake.w - 1u]);
+}
+
+float rb_hybrid_luminance(vec3 c)
+{
+    return dot(max(c, vec3(0.0)), vec3(0.2126, 0.7152, 0.0722));
+}
+
+// The light sample's pdf (solid angle, from the ray's origin) of a point of emissive material m
+// at distance dist whose face is at cosine cos_l to the ray: the emitter chosen by power, the
+// point uniformly on it, so per unit area the emissive factor's luminance over the total power.
+float rb_hybrid_light_pdf(rb_gpu_material m, float dist, float cos_l)
+{
+    float total = rb_hybrid_emit_total();
+    float p_area = total > 0.0 ? rb_hybrid_luminance(m.emissive.rgb) / total : 0.0;
+    return cos_l > 0.0 ? p_area * dist * dist / cos_l : 1e30;
+}
+
+// The MIS weight of emission a BRDF ray of pdf pdf_brdf found on global triangle t, at distance
+// dist from its origin, along l: against the light sample that could have found the same point.
+float rb_hybrid_emit_weight(uint t, vec3 l, float dist, float pdf_brdf)
+{
+    if (pc.bake.w == 0u)
+        return 1.0;
+    rb_gpu_vertex v0 = verts[indices[3u * t]];
+    rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
+    vec3 ne = cross(verts[indices[3u * t + 1u]].position.xyz - v0.position.xyz,
+                    verts[indices[3u * t + 2u]].position.xyz - v0.position.xyz);
+    float len = length(ne);
+    float cos_l = len > 0.0 ? abs(dot(ne / len, l)) : 0.0;
+    return rb_hybrid_mis(pdf_brdf, rb_hybrid_light_pdf(m, dist, cos_l));
 }
 
 vec3 rb_hybrid_env(vec3 d)

@@ -25,7 +25,7 @@ still_demo "$T/still.yaml" 96x54 63 "[direct, indirect, depth, motion, indirect_
 rb render "$T/still.yaml" --out "$T/s"
 expect_exit 0 "64 frames of the still demo render with the hybrid integrator"
 tm="$T/s/frame.0005.timing.json"
-for pass in gbuffer direct hiz diffuse_rays specular_rays ray_queue bvh_rays accumulate tiles \
+for pass in gbuffer direct hiz diffuse_rays specular_rays ray_queue bvh_rays light_rays accumulate tiles \
     diffuse_filter specular_filter output; do
     check "the timing sidecar names the pass '$pass'" grep -q "\"name\": \"$pass\"" "$tm"
 done

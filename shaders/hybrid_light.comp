@@ -1,0 +1,99 @@
+// hybrid_light: next-event estimation at the camera vertex (DESIGN.md "hybrid", rays). For each
+// ray a lobe of the pixel traced this frame (a sample the accumulators will count), one light
+// sample: an emissive triangle chosen by emitted power (the emitter table), a point uniformly
+// on it, visibility by a shadow ray through the BVH, the lobe's BRDF (untextured, as the ray's
+// weight is) x cosine x emission over the sample's pdf, weighted against the BRDF rays that
+// find the same point by the power heuristic (the reference's); added to what the ray found
+// directly. Its random numbers are the pixel's own R3 sequence (rb_hybrid_u3).
+#version 460
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+#include "hybrid.glsl"
+
+// The first emitter whose running sum is over x (one of positive power).
+uint pick_emitter(float x)
+{
+    uint base = rb_hybrid_cdf_base(), lo = 0u, hi = pc.bake.w - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (uintBitsToFloat(blocks[base + mid]) > x)
+            hi = mid;
+        else
+            lo = mid + 1u;
+    }
+    return lo;
+}
+
+// One light sample of the lobe at the pixel (o: the rays' origin), with random numbers u (the
+// point) and pick (the emitter).
+vec3 light_sample(uint lobe, vec3 o, vec3 n, vec3 ng, vec3 v, vec4 spec, float f90, vec2 u,
+                  float pick)
+{
+    float total = rb_hybrid_emit_total();
+    if (!(total > 0.0))
+        return vec3(0.0);
+    uint t = indices[floatBitsToUint(pc.scene.z) + pick_emitter(min(pick, 0.99999994) * total)];
+    rb_gpu_vertex v0 = verts[indices[3u * t]], v1 = verts[indices[3u * t + 1u]],
+                  v2 = verts[indices[3u * t + 2u]];
+    float su = sqrt(u.x), b1 = su * (1.0 - u.y), b2 = su * u.y;
+    vec3 q = (1.0 - b1 - b2) * v0.position.xyz + b1 * v1.position.xyz + b2 * v2.position.xyz;
+    vec3 d = q - o;
+    float dist = length(d);
+    if (!(dist > 0.0))
+        return vec3(0.0);
+    vec3 l = d / dist;
+    if (dot(ng, l) <= 0.0 || dot(n, l) <= 0.0)
+        return vec3(0.0);
+    vec3 ne = cross(v1.position.xyz - v0.position.xyz, v2.position.xyz - v0.position.xyz);
+    float cos_l = abs(dot(normalize(ne), l));
+    rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
+    float pdf = rb_hybrid_light_pdf(m, dist, cos_l);
+    if (!(pdf > 0.0) || !(pdf < 1e30))
+        return vec3(0.0);
+    vec3 kd, ks;
+    rb_brdf_parts(n, v, l, spec.rgb, f90, spec.a, kd, ks);
+    vec3 f = lobe == RB_HYBRID_DIFFUSE ? kd : ks;
+    if (!(max(f.r, max(f.g, f.b)) > 0.0))
+        return vec3(0.0);
+    vec2 uv = (1.0 - b1 - b2) * v0.uv.xy + b1 * v1.uv.xy + b2 * v2.uv.xy;
+    vec3 le = rb_material_eval(m, uv, srgb_textures, linear_textures).emission;
+    if (!(max(le.r, max(le.g, le.b)) > 0.0))
+        return vec3(0.0);
+    // The shadow ray stops short of the emitter, so that it cannot find the emitter itself.
+    if (rb_bvh_occluded(o, l, 0.0, dist * (1.0 - 1e-3)))
+        return vec3(0.0);
+    float w = rb_hybrid_mis(pdf, rb_hybrid_pdf(lobe, n, v, l, spec.a));
+    return f * le * (dot(n, l) * w / pdf);
+}
+
+void main()
+{
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(uvec2(px), g.size.xy)) || pc.bake.w == 0u)
+        return;
+    vec4 pos = imageLoad(gb_position, px);
+    if (!(pos.w > 0.0))
+        return;
+    vec3 n = imageLoad(gb_normal, px).xyz;
+    vec3 ng = rb_oct_decode(imageLoad(gb_motion, px).zw);
+    vec3 v = normalize(g.camera_pos.xyz - pos.xyz);
+    vec4 spec = imageLoad(gb_specular, px);
+    float f90 = imageLoad(gb_emission, px).w;
+    vec3 o = rb_hybrid_origin(px);
+    uint rays = pc.frame.y;
+    for (uint lobe = 0u; lobe < 2u; lobe++)
+        for (uint r = 0u; r < rays; r++) {
+            uint slot = rb_hybrid_slot(lobe, r, px);
+            uint state = floatBitsToUint(slots[slot].a.w);
+            if (state != RB_HYBRID_SCREEN && state != RB_HYBRID_BVH && state != RB_HYBRID_MISS &&
+                state != RB_HYBRID_ABSORBED)
+                continue;
+            uint k = pc.frame.x * rays + r;
+            vec3 u = rb_hybrid_u3(k, px, lobe);
+            vec3 c = light_sample(lobe, o, n, ng, v, spec, f90, u.xy, u.z);
+            if (max(c.r, max(c.g, c.b)) > 0.0)
+                slots[slot].a.rgb += c;
+        }
+}
