@@ -23,7 +23,7 @@ void main()
     if (any(greaterThanEqual(uvec2(px), g.size.xy)))
         return;
     uint lobe = pc.frame.z;
-    uint layer = 4u * pc.history.z + 2u * lobe;
+    uint layer = 4u * (pc.history.z & 1u) + 2u * lobe;
     vec4 pos = imageLoad(gb_position, px);
     vec4 d0 = imageLoad(acc, ivec3(px, layer));
     vec3 dsum = vec3(0.0), isum = vec3(0.0);
@@ -74,7 +74,7 @@ void main()
     if (lobe == RB_HYBRID_DIFFUSE) {
         imageStore(o_direct_diffuse, px, dl);
         imageStore(o_indirect_diffuse, px, il);
-        vec4 sp = imageLoad(acc, ivec3(px, 4u * pc.history.z + 2u));
+        vec4 sp = imageLoad(acc, ivec3(px, 4u * (pc.history.z & 1u) + 2u));
         // The tiles pass has just written the mask the next frame's rays follow (unless that
         // frame starts the younger accumulator again); a target of 0 marks no tile done.
         bool on = pc.params.x > 0.0;

@@ -202,8 +202,11 @@ void main()
         }
         vec4 aq = imageLoad(gb_albedo, hit);
         vec4 nq = imageLoad(gb_normal, hit);
-        vec3 baked = rb_hybrid_baked_at(pq.xyz, ngq, pq.w, aq.w, nq.w < 0.0);
-        vec3 lit = rb_hybrid_shade(pq.xyz, nq.xyz, ngq, -l, aq.rgb, sq.rgb, eq.w, sq.a, baked);
+        vec3 baked;
+        bool fed = rb_hybrid_feedback(pq.xyz, nq.xyz, aq.rgb, sq.rgb, baked);
+        if (!fed)
+            baked = rb_hybrid_baked_at(pq.xyz, ngq, pq.w, aq.w, nq.w < 0.0);
+        vec3 lit = rb_hybrid_shade(pq.xyz, nq.xyz, ngq, -l, aq.rgb, sq.rgb, eq.w, sq.a, baked, fed);
         // Emission found is weighed against the light sample of the same point (its triangle
         // from the G-buffer).
         vec3 found = vec3(0.0);

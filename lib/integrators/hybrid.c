@@ -17,6 +17,13 @@
  * is its own integral, sampled by its own rays (pdf rb_hybrid_pdf) and by the light samples.
  * The environment has no light sample: the BRDF rays that miss find it, weight 1.
  *
+ * Every bounce (integrator.hybrid.feedback). A hit reflects what the pixel that saw it in the
+ * previous frame gathered, diffuse and specular, direct and indirect (rb_hybrid_feedback),
+ * read from this frame's younger accumulator and never on the frame that starts it again; a hit
+ * the previous frame did not see takes its baked light and one secondary diffuse ray through the
+ * BVH. So each frame adds a bounce, and what an accumulator holds still depends only on the
+ * frames since its start: the feedback keeps the history contract below.
+ *
  * History. Two accumulators take every sample; accumulator A starts again on the frames
  * sequence_start + kW, B on sequence_start + kW + W/2 (and both on sequence_start), W =
  * integrator.hybrid.history. The output reads the one that started longer ago; the rays'
@@ -79,6 +86,14 @@ struct hybrid {
 static uint32_t history_frames(const struct rb_job *job)
 {
     return job->integrator.hybrid.history;
+}
+
+/* The history spans W frames, but a frame reads the vertices of its own and the previous frame
+ * only (motion vectors): two animation slots, whatever W. */
+static uint32_t slot_frames(const struct rb_job *job)
+{
+    (void)job;
+    return 1;
 }
 
 static void destroy(struct rb_integrator *it, void *state)
@@ -629,8 +644,8 @@ static void set_push(const struct rb_integrator *it, struct hybrid *d, int frame
     float dx = hi.x - lo.x, dy = hi.y - lo.y, dz = hi.z - lo.z;
     *p = (struct rb_gpu_hybrid_push){
         .frame = {(uint32_t)frame, s->rays, 0, (uint32_t)(d->h.slot_count / 2)},
-        .history = {rel % w == 0, rel == 0 || (rel >= half && (rel - half) % w == 0), b_older,
-                    !b_older},
+        .history = {rel % w == 0, rel == 0 || (rel >= half && (rel - half) % w == 0),
+                    b_older | (s->feedback ? 2u : 0u), !b_older},
         .sizes = {s->spp, s->screen_steps, d->queue_capacity, d->h.hiz_levels},
         .more = {0, 0, 0, s->filter_radius_px},
         .params = {s->noise, s->thickness, s->filter_depth, s->filter_normal},
@@ -746,6 +761,7 @@ static void collect(struct rb_integrator *it, void *state, struct rb_frame_resul
 const struct rb_integrator_ops rb_integrator_hybrid = {
     .name = "hybrid",
     .history_frames = history_frames,
+    .slot_frames = slot_frames,
     .create = create,
     .prepare = prepare,
     .record = record,

@@ -366,12 +366,14 @@ vec3 rb_hybrid_baked_at(vec3 p, vec3 ng, float depth, float tri, bool back)
 }
 
 // The light a surface point sends toward v, but its emission: the punctual lights' direct light
-// through the shadow maps, and the baked light of the emitters and the environment (baked:
-// irradiance / pi) through its diffuse albedo. (Shading at a hit, screen or BVH alike.)
+// through the shadow maps, and either what its pixel gathered of the rest (rb_hybrid_feedback,
+// when `fed`: `baked` is that light) or the baked light of the emitters and the environment
+// (irradiance / pi) through its diffuse albedo. (Shading at a hit, screen or BVH alike.)
 vec3 rb_hybrid_shade(vec3 p, vec3 n, vec3 ng, vec3 v, vec3 c_diff, vec3 f0, float f90,
-                     float roughness, vec3 baked)
+                     float roughness, vec3 baked, bool fed)
 {
-    return rb_punctual_light(vec3(0.0), p, n, ng, v, c_diff, f0, f90, roughness) + c_diff * baked;
+    return rb_punctual_light(vec3(0.0), p, n, ng, v, c_diff, f0, f90, roughness) +
+           (fed ? baked : c_diff * baked);
 }
 
 // Where the pixel's surface was in the previous frame (its motion vector), or (-1, -1) when it
@@ -388,6 +390,48 @@ ivec2 rb_hybrid_reproject(ivec2 px, float depth, vec3 n)
         dot(geo.xyz, n) < pc.params.w)
         return ivec2(-1);
     return q;
+}
+
+// Every bounce (DESIGN.md "hybrid", bvh trace): the light a hit at world point p (shading
+// normal n, on the side the ray sees; diffuse albedo c_diff, F0 f0) reflects, after any number
+// of bounces, as the pixel that saw p in the previous frame gathered it (seed 003's screen hits
+// reading the lit result): that pixel's diffuse and specular light, direct and indirect, each
+// over its samples, in this frame's younger accumulator, textured by the hit's own maps (the
+// accumulators are untextured). It is the light the pixel sends toward the camera, taken as what
+// the hit sends along the ray. Each frame's hits thus reflect one bounce more than the last
+// frame's. False where the previous frame did not see p (off screen, or another surface there:
+// the depth and normal tests), where the pixel has no diffuse samples yet, where that accumulator
+// starts again this frame (so that what an accumulator holds depends on the frames since its
+// start alone: the history contract of lib/integrators/hybrid.c), and with
+// integrator.hybrid.feedback off.
+bool rb_hybrid_feedback(vec3 p, vec3 n, vec3 c_diff, vec3 f0, out vec3 light)
+{
+    light = vec3(0.0);
+    uint set = pc.history.w;
+    if ((pc.history.z & 2u) == 0u || (set == 0u ? pc.history.x : pc.history.y) != 0u)
+        return false;
+    vec4 c = g.prev_view_proj * vec4(p, 1.0);
+    if (!(c.w > 0.0))
+        return false;
+    ivec2 q = ivec2(floor((c.xy / c.w * 0.5 + 0.5) * vec2(g.size.xy)));
+    if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(g.size.xy))))
+        return false;
+    vec4 geo = imageLoad(acc_prev, ivec3(q, RB_HYBRID_ACC_GEOMETRY));
+    if (!(geo.w > 0.0) || abs(geo.w - c.w) > pc.params.z * 2.0 * c.w ||
+        dot(geo.xyz, n) < pc.params.w)
+        return false;
+    uint base = 4u * set;
+    vec4 dd = imageLoad(acc_prev, ivec3(q, base + RB_HYBRID_ACC_DIFFUSE_DIRECT));
+    if (!(dd.w > 0.0) && max(c_diff.r, max(c_diff.g, c_diff.b)) > 0.0)
+        return false;
+    vec4 di = imageLoad(acc_prev, ivec3(q, base + RB_HYBRID_ACC_DIFFUSE_INDIRECT));
+    vec4 sd = imageLoad(acc_prev, ivec3(q, base + RB_HYBRID_ACC_SPECULAR_DIRECT));
+    vec4 si = imageLoad(acc_prev, ivec3(q, base + RB_HYBRID_ACC_SPECULAR_INDIRECT));
+    if (dd.w > 0.0)
+        light += c_diff * (dd.rgb + di.rgb) / dd.w;
+    if (sd.w > 0.0)
+        light += rb_spec_map(f0) * (sd.rgb + si.rgb) / sd.w;
+    return true;
 }
 
 // The tile mask at a pixel, smoothed by a cubic B-spline across tiles (seed 003: "bicubic tile

@@ -16,9 +16,10 @@ relmse() { # relmse A B LAYER
         head -n 1
 }
 
-# The demo room, its animation stopped and its camera still.
+# The demo room, its animation stopped and its camera still; its hits lit by direct light alone
+# (feedback off), to be held to the reference with one bounce.
 still_demo "$T/still.yaml" 96x54 63 "[direct, indirect, depth, motion, indirect_diffuse, indirect_specular]" \
-    "{name: hybrid, hybrid: {history: 64}}"
+    "{name: hybrid, hybrid: {history: 64, feedback: false}}"
 
 # ---- passes and ray counts ------------------------------------------------------------------
 
