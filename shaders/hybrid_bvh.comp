@@ -7,7 +7,8 @@
 // see) the triangle's baked light of the emitters and the environment plus, with feedback on,
 // one explicit secondary ray: a cosine-weighted diffuse ray from the hit through the BVH, whose
 // own hit sends what the previous frame gathered there (or its baked light) back, so that the
-// hidden surfaces' light has its further bounces too; a miss takes the environment.
+// hidden surfaces' light has its further bounces too; a miss takes the environment, weighed by
+// MIS against hybrid_light's samples of it.
 // Both faces of every surface are hit and shaded and emit, as the reference's bounce rays find
 // them; only double-sided materials have their back's light baked.
 #version 460
@@ -83,7 +84,11 @@ void main()
     rb_bvh_hit hit;
     if (!rb_bvh_intersect(o, d, 0.0, 1e30, hit)) {
         atomicAdd(counters.more.x, 1u);
-        slots[slot].a = vec4(weight * rb_hybrid_env(d), uintBitsToFloat(RB_HYBRID_MISS));
+        // weighed against the environment's light sample of the same direction
+        float w = 1.0;
+        if (rb_hybrid_env_lit())
+            w = rb_hybrid_mis(s.b.w, rb_hybrid_env_pdf(imageLoad(gb_normal, px).xyz, d));
+        slots[slot].a = vec4(weight * rb_hybrid_env(d) * w, uintBitsToFloat(RB_HYBRID_MISS));
         slots[slot].b = vec4(0.0);
         return;
     }

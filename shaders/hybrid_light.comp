@@ -1,10 +1,13 @@
 // hybrid_light: next-event estimation at the camera vertex (DESIGN.md "hybrid", rays). For each
 // ray a lobe of the pixel traced this frame (a sample the accumulators will count), one light
-// sample: an emissive triangle chosen by emitted power (the emitter table), a point uniformly
-// on it, visibility by a shadow ray through the BVH, the lobe's BRDF (untextured, as the ray's
-// weight is) x cosine x emission over the sample's pdf, weighted against the BRDF rays that
-// find the same point by the power heuristic (the reference's); added to what the ray found
-// directly. Its random numbers are the pixel's own R3 sequence (rb_hybrid_u3).
+// sample of the emitters: an emissive triangle chosen by emitted power (the emitter table), a
+// point uniformly on it; and one of the environment: a direction by its importance table (or
+// cosine-weighted without a map, as the reference's). Each has its visibility by a shadow ray
+// through the BVH, and brings the lobe's BRDF (untextured, as the ray's weight is) x cosine x
+// its light over its pdf, weighted against the BRDF rays that find the same light by the power
+// heuristic (the reference's); added to what the ray found directly. Their random numbers are
+// the pixel's own R3 sequence (rb_hybrid_u3) and a rotation of its R2 sequence apart from the
+// rays'.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 
@@ -68,10 +71,30 @@ vec3 light_sample(uint lobe, vec3 o, vec3 n, vec3 ng, vec3 v, vec4 spec, float f
     return f * le * (dot(n, l) * w / pdf);
 }
 
+// One light sample of the environment for the lobe at the pixel, with random numbers u.
+vec3 env_sample(uint lobe, vec3 o, vec3 n, vec3 ng, vec3 v, vec4 spec, float f90, vec2 u)
+{
+    vec3 l;
+    float pdf = rb_hybrid_env_sample(n, u, l);
+    if (!(pdf > 0.0) || !(pdf < 1e30) || dot(ng, l) <= 0.0 || dot(n, l) <= 0.0)
+        return vec3(0.0);
+    vec3 kd, ks;
+    rb_brdf_parts(n, v, l, spec.rgb, f90, spec.a, kd, ks);
+    vec3 f = lobe == RB_HYBRID_DIFFUSE ? kd : ks;
+    if (!(max(f.r, max(f.g, f.b)) > 0.0))
+        return vec3(0.0);
+    vec3 le = rb_hybrid_env(l);
+    if (!(max(le.r, max(le.g, le.b)) > 0.0) || rb_bvh_occluded(o, l, 0.0, 1e30))
+        return vec3(0.0);
+    float w = rb_hybrid_mis(pdf, rb_hybrid_pdf(lobe, n, v, l, spec.a));
+    return f * le * (dot(n, l) * w / pdf);
+}
+
 void main()
 {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(uvec2(px), g.size.xy)) || pc.bake.w == 0u)
+    bool env = rb_hybrid_env_lit();
+    if (any(greaterThanEqual(uvec2(px), g.size.xy)) || (pc.bake.w == 0u && !env))
         return;
     vec4 pos = imageLoad(gb_position, px);
     if (!(pos.w > 0.0))
@@ -92,7 +115,10 @@ void main()
                 continue;
             uint k = pc.frame.x * rays + r;
             vec3 u = rb_hybrid_u3(k, px, lobe);
-            vec3 c = light_sample(lobe, o, n, ng, v, spec, f90, u.xy, u.z);
+            vec3 c = pc.bake.w > 0u ? light_sample(lobe, o, n, ng, v, spec, f90, u.xy, u.z)
+                                    : vec3(0.0);
+            if (env)
+                c += env_sample(lobe, o, n, ng, v, spec, f90, rb_hybrid_u(k, px, lobe + 8u));
             if (max(c.r, max(c.g, c.b)) > 0.0)
                 slots[slot].a.rgb += c;
         }

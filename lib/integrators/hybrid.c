@@ -15,7 +15,8 @@
  * ray through the BVH. A BRDF ray that finds an emitter, in screen space or in the BVH, and the
  * light sample are weighed by the power heuristic (beta 2, the reference's), per lobe: each lobe
  * is its own integral, sampled by its own rays (pdf rb_hybrid_pdf) and by the light samples.
- * The environment has no light sample: the BRDF rays that miss find it, weight 1.
+ * The environment has its light sample too, by the importance table of its map (the
+ * reference's, env_init) or cosine-weighted without one, weighed against the rays that miss.
  *
  * Every bounce (integrator.hybrid.feedback). A hit reflects what the pixel that saw it in the
  * previous frame gathered, diffuse and specular, direct and indirect (rb_hybrid_feedback),
@@ -81,6 +82,10 @@ struct hybrid {
      * the device's index buffer */
     uint32_t *emitters;
     uint32_t emitter_count;
+    /* the environment's importance table (hybrid.glsl), after the emitters; 0 floats without a
+     * map */
+    float *env_table;
+    size_t env_floats;
 };
 
 static uint32_t history_frames(const struct rb_job *job)
@@ -125,6 +130,7 @@ static void destroy(struct rb_integrator *it, void *state)
     free(d->indices);
     free(d->objects);
     free(d->emitters);
+    free(d->env_table);
     free(d);
 }
 
@@ -255,7 +261,8 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
          (uint64_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle) +
              ((uint64_t)d->word_vec4s + d->bake_capacity) * 16},
         {"noise tiles", 2 * tiles * sizeof(float)},
-        {"triangles and emitters", (all_triangles(d) * 3 + d->emitter_count) * sizeof(uint32_t)},
+        {"triangles, emitters and the environment's table",
+         (all_triangles(d) * 3 + d->emitter_count + d->env_floats) * sizeof(uint32_t)},
     };
     enum rb_status st;
     for (size_t i = 0; i < COUNT(bound); i++)
@@ -284,6 +291,8 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
     memcpy(h->indices.mapped, d->indices, all_triangles(d) * 3 * sizeof(uint32_t));
     memcpy((uint32_t *)h->indices.mapped + all_triangles(d) * 3, d->emitters,
            (size_t)d->emitter_count * sizeof(uint32_t));
+    memcpy((uint32_t *)h->indices.mapped + all_triangles(d) * 3 + d->emitter_count, d->env_table,
+           d->env_floats * sizeof(float));
     const VkImageUsageFlags image_use = VK_IMAGE_USAGE_STORAGE_BIT;
     static const char *const acc_names[2] = {"hybrid.acc0", "hybrid.acc1"};
     static const char *const light_names[RB_BDPT_LIGHT_COUNT] = {
@@ -400,6 +409,77 @@ static enum rb_status emitters_init(struct rb_integrator *it, struct hybrid *d, 
     return RB_OK;
 }
 
+/* A texel's luminance as the reference's importance table reads it: u repeats, v clamps. */
+static float env_luminance(const struct rb_integrator *it, int64_t x, int64_t y)
+{
+    int64_t w = it->env_width_px, h = it->env_height_px;
+    x %= w;
+    if (x < 0)
+        x += w;
+    y = y < 0 ? 0 : (y >= h ? h - 1 : y);
+    const float *t = it->env_rgba + ((size_t)y * (size_t)w + (size_t)x) * 4;
+    float lum =
+        0.2126f * fmaxf(t[0], 0.0f) + 0.7152f * fmaxf(t[1], 0.0f) + 0.0722f * fmaxf(t[2], 0.0f);
+    return lum == lum && lum < INFINITY ? lum : 0.0f;
+}
+
+/* The environment's light samples: whether it is lit, and with a map the importance table of
+ * its texels, computed as the reference's (lib/reference/lights.c, rb_ref_env_init) so that both
+ * sample the same directions with the same pdf: the marginal CDF over rows (h + 1 floats), each
+ * row's CDF (w + 1 a row), each texel's probability (w h). */
+static enum rb_status env_init(struct rb_integrator *it, struct hybrid *d, struct rb_err *err)
+{
+    const struct rb_job *job = it->job;
+    const float *c = job->environment.color;
+    bool lit = job->environment.intensity > 0.0f &&
+               (it->env_rgba || c[0] > 0.0f || c[1] > 0.0f || c[2] > 0.0f);
+    d->h.has_env_light = lit;
+    if (!lit || !it->env_rgba)
+        return RB_OK;
+    uint32_t w = it->env_width_px, h = it->env_height_px;
+    d->env_floats = (size_t)(h + 1) + (size_t)h * (w + 1) + (size_t)w * h;
+    float *t = d->env_table = malloc(d->env_floats * sizeof(float));
+    double *row_sum = malloc(((size_t)h + 1) * sizeof(double));
+    if (!t || !row_sum) {
+        free(row_sum);
+        return rb_errf(err, RB_E_NOMEM, "out of memory for the environment's importance table");
+    }
+    float *marginal = t, *conditional = t + h + 1, *texel_pdf = conditional + (size_t)h * (w + 1);
+    double total = 0.0;
+    for (uint32_t y = 0; y < h; y++) {
+        float st = sinf(RB_PI * ((float)y + 0.5f) / (float)h);
+        double sum = 0.0;
+        float *cdf = conditional + (size_t)y * (w + 1);
+        cdf[0] = 0.0f;
+        for (uint32_t x = 0; x < w; x++) {
+            float m = 0.0f;
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++)
+                    m = fmaxf(m, env_luminance(it, (int64_t)x + dx, (int64_t)y + dy));
+            float wgt = m * st;
+            texel_pdf[(size_t)y * w + x] = wgt;
+            sum += wgt;
+            cdf[x + 1] = (float)sum;
+        }
+        for (uint32_t x = 1; x <= w; x++)
+            cdf[x] = sum > 0.0 ? (float)(cdf[x] / sum) : (float)x / (float)w;
+        cdf[w] = 1.0f;
+        row_sum[y] = sum;
+        total += sum;
+    }
+    double acc = 0.0;
+    marginal[0] = 0.0f;
+    for (uint32_t y = 0; y < h; y++) {
+        acc += row_sum[y];
+        marginal[y + 1] = total > 0.0 ? (float)(acc / total) : 0.0f;
+    }
+    marginal[h] = 1.0f;
+    for (size_t i = 0; i < (size_t)w * h; i++)
+        texel_pdf[i] = total > 0.0 ? (float)(texel_pdf[i] / total) : 0.0f;
+    free(row_sum);
+    return RB_OK;
+}
+
 static enum rb_status create(struct rb_integrator *it, void **state, struct rb_err *err)
 {
     struct hybrid *d = calloc(1, sizeof(*d));
@@ -411,7 +491,8 @@ static enum rb_status create(struct rb_integrator *it, void **state, struct rb_e
     if ((st = rb_base_create(it, &d->base, err)) ||
         (st = rb_pass_hybrid_create(it->gpu, &d->passes, err)) ||
         (st = geometry_init(it, d, err)) || (st = emitters_init(it, d, err)) ||
-        (st = bake_init(it, d, err)) || (st = create_resources(it, d, err))) {
+        (st = env_init(it, d, err)) || (st = bake_init(it, d, err)) ||
+        (st = create_resources(it, d, err))) {
         destroy(it, d);
         return st;
     }

@@ -250,8 +250,8 @@ static void record_light(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
                          const struct rb_frame *frame, const struct rb_frame_slot *slot,
                          struct rb_hybrid_frame *h)
 {
-    if (!h->push.bake[3])
-        return; /* nothing emits: no light sample */
+    if (!h->push.bake[3] && !h->has_env_light)
+        return; /* nothing emits and the environment is black: no light sample */
     bind(&p->light, cmd, frame, slot, h);
     vkCmdDispatch(cmd, groups(frame->width_px, 8), groups(frame->height_px, 8), 1);
 }

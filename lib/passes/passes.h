@@ -447,12 +447,14 @@ struct rb_hybrid_frame {
     struct rb_gpu_buffer queue;    /* uint [queue capacity] */
     struct rb_gpu_buffer blocks;   /* uint per block of slots */
     struct rb_gpu_buffer bvh_nodes, bvh_tris;
-    struct rb_gpu_buffer indices; /* the frame's triangles, then the BVH's coarser objects' */
+    struct rb_gpu_buffer indices; /* the frame's triangles, then the BVH's coarser objects',
+                                   * the emitter list, the environment's importance table */
     struct rb_gpu_buffer tiles;   /* float [2 x tiles] */
     struct rb_gpu_image acc[2];   /* RB_HYBRID_ACC_LAYERS layers; frame f writes f mod 2 */
     struct rb_gpu_image stats;    /* samples (diffuse, specular), tile mask */
     struct rb_gpu_image light[RB_BDPT_LIGHT_COUNT]; /* what the output pass textures */
     uint32_t cur;                                   /* the accumulator written: frame mod 2 */
+    bool has_env_light; /* the environment is lit: light samples of it (hybrid_light.comp) */
 };
 
 struct rb_pass_hybrid;

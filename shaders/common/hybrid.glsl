@@ -265,6 +265,99 @@ float rb_hybrid_light_pdf(rb_gpu_material m, float dist, float cos_l)
     return cos_l > 0.0 ? p_area * dist * dist / cos_l : 1e30;
 }
 
+// The environment's light samples (DESIGN.md "hybrid", rays), as the reference takes them
+// (lib/reference/lights.c): with a map, by the importance table of its texels (each the largest
+// luminance of its 3 x 3 neighbourhood times sin(theta)), which lib/integrators/hybrid.c writes
+// into `indices` after the emitter list: the marginal CDF over rows (h + 1), each row's CDF
+// (w + 1 a row), then each texel's probability (w h), as float bits; without a map, cosine-
+// weighted around the shading normal. None when the environment is black (rb_hybrid_env_lit).
+bool rb_hybrid_env_lit()
+{
+    return g.env.x > 0.0 &&
+           (g.env.z > 0.5 || max(g.env_color.r, max(g.env_color.g, g.env_color.b)) > 0.0);
+}
+
+uint rb_hybrid_env_table()
+{
+    return floatBitsToUint(pc.scene.z) + pc.bake.w;
+}
+
+float rb_hybrid_table(uint i)
+{
+    return uintBitsToFloat(indices[i]);
+}
+
+// The reference's search: the last i in [0, n) with cdf[i] <= u, skipping empty intervals.
+uint rb_hybrid_search(uint base, uint n, float u)
+{
+    uint lo = 0u, hi = n;
+    while (hi - lo > 1u) {
+        uint mid = lo + (hi - lo) / 2u;
+        if (rb_hybrid_table(base + mid) <= u)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    while (lo + 1u < n && !(rb_hybrid_table(base + lo + 1u) > rb_hybrid_table(base + lo)))
+        lo++;
+    return lo;
+}
+
+// The pdf (solid angle) of the environment's light sample of direction d at shading normal n.
+float rb_hybrid_env_pdf(vec3 n, vec3 d)
+{
+    if (!rb_hybrid_env_lit())
+        return 0.0;
+    if (g.env.z <= 0.5)
+        return max(dot(n, d), 0.0) / RB_PI;
+    uvec2 size = uvec2(textureSize(env_map, 0));
+    vec2 uv = rb_equirect_uv(d, g.env.y);
+    if (any(isnan(uv)))
+        return 0.0;
+    uvec2 t = uvec2(clamp(floor(uv * vec2(size)), vec2(0.0), vec2(size) - 1.0));
+    float st = sin(uv.y * RB_PI);
+    if (!(st > 0.0))
+        return 0.0;
+    uint pdfs = rb_hybrid_env_table() + (size.y + 1u) + size.y * (size.x + 1u);
+    float p_uv = rb_hybrid_table(pdfs + t.y * size.x + t.x) * float(size.x) * float(size.y);
+    return p_uv / (2.0 * RB_PI * RB_PI * st);
+}
+
+// The environment's light sample of random numbers u at shading normal n: its direction d and
+// pdf (0: none).
+float rb_hybrid_env_sample(vec3 n, vec2 u, out vec3 d)
+{
+    d = n;
+    if (!rb_hybrid_env_lit())
+        return 0.0;
+    if (g.env.z <= 0.5) {
+        vec3 t, b;
+        rb_basis(n, t, b);
+        float r = sqrt(u.x), phi = 2.0 * RB_PI * u.y;
+        d = normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(1.0 - u.x, 0.0)) * n);
+        return rb_hybrid_env_pdf(n, d);
+    }
+    uvec2 size = uvec2(textureSize(env_map, 0));
+    uint marginal = rb_hybrid_env_table(), rows = marginal + size.y + 1u;
+    uint y = rb_hybrid_search(marginal, size.y, u.x);
+    float r0 = rb_hybrid_table(marginal + y), r1 = rb_hybrid_table(marginal + y + 1u);
+    float fy = r1 > r0 ? (u.x - r0) / (r1 - r0) : 0.5;
+    uint row = rows + y * (size.x + 1u);
+    uint x = rb_hybrid_search(row, size.x, u.y);
+    float c0 = rb_hybrid_table(row + x), c1 = rb_hybrid_table(row + x + 1u);
+    float fx = c1 > c0 ? (u.y - c0) / (c1 - c0) : 0.5;
+    float mu = (float(x) + clamp(fx, 0.0, 1.0)) / float(size.x);
+    float mv = (float(y) + clamp(fy, 0.0, 1.0)) / float(size.y);
+    // lights.c's equirect_dir: the direction of map coordinates (mu, mv), rotation undone
+    float theta = mv * RB_PI, phi = (mu - 0.5) * 2.0 * RB_PI, st = sin(theta);
+    vec3 m = vec3(st * sin(phi), cos(theta), -st * cos(phi));
+    float c = cos(-g.env.y), sn = sin(-g.env.y);
+    d = vec3(c * m.x - sn * m.z, m.y, sn * m.x + c * m.z);
+    if (!(st > 0.0))
+        return 0.0;
+    return rb_hybrid_env_pdf(n, d);
+}
+
 // The MIS weight of emission a BRDF ray of pdf pdf_brdf found on global triangle t, at distance
 // dist from its origin, along l: against the light sample that could have found the same point.
 float rb_hybrid_emit_weight(uint t, vec3 l, float dist, float pdf_brdf)
