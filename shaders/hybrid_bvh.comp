@@ -1,8 +1,14 @@
 // hybrid_bvh: the queued rays through the BVH (seed 003: traverse the BVH later, in a compute
 // shader: the default device has no ray queries). A hit is shaded as a screen hit is: its
-// material at the hit (textures and normal map, at their full resolution), its emission as the camera vertex's direct
-// light, the punctual lights' shadow-mapped light and the triangle's baked light of the
-// emitters and the environment as the bounce; a miss takes the environment.
+// material at the hit (textures and normal map, at their full resolution), its emission as the
+// camera vertex's direct light (weighed by MIS against hybrid_light's samples, with the pdf the
+// ray carries), the punctual lights' shadow-mapped light and what the previous frame gathered
+// at the hit (rb_hybrid_feedback), or where it saw no such thing (a surface the camera does not
+// see) the triangle's baked light of the emitters and the environment plus, with feedback on,
+// one explicit secondary ray: a cosine-weighted diffuse ray from the hit through the BVH, whose
+// own hit sends what the previous frame gathered there (or its baked light) back, so that the
+// hidden surfaces' light has its further bounces too; a miss takes the environment, weighed by
+// MIS against hybrid_light's samples of it.
 // Both faces of every surface are hit and shaded and emit, as the reference's bounce rays find
 // them; only double-sided materials have their back's light baked.
 #version 460
@@ -12,32 +18,20 @@ layout(local_size_x = 64) in;
 
 #include "hybrid.glsl"
 
-void main()
+// A BVH hit's surface: position, shading and geometric normals on the side the ray d arrives
+// from (front: whether that is the triangle's front), and its material.
+void surface(vec3 o, vec3 d, rb_bvh_hit hit, out vec3 p, out vec3 n, out vec3 ng, out bool front,
+             out rb_surface sf)
 {
-    uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * RB_HYBRID_BVH_GROUP +
-             gl_LocalInvocationID.x;
-    if (i >= counters.more.z)
-        return;
-    uint slot = queue[i];
-    rb_gpu_hybrid_slot s = slots[slot];
-    vec3 o = rb_hybrid_origin(rb_hybrid_slot_pixel(slot)), d = s.a.xyz, weight = s.b.rgb;
-    rb_bvh_hit hit;
-    if (!rb_bvh_intersect(o, d, 0.0, 1e30, hit)) {
-        atomicAdd(counters.more.x, 1u);
-        slots[slot].a = vec4(weight * rb_hybrid_env(d), uintBitsToFloat(RB_HYBRID_MISS));
-        slots[slot].b = vec4(0.0);
-        return;
-    }
-    atomicAdd(counters.rays.w, 1u);
     uint t = hit.triangle;
     rb_gpu_vertex v0 = verts[indices[3u * t]], v1 = verts[indices[3u * t + 1u]],
                   v2 = verts[indices[3u * t + 2u]];
     vec3 b = vec3(1.0 - hit.bary.x - hit.bary.y, hit.bary);
-    vec3 ng = normalize(cross(v1.position.xyz - v0.position.xyz, v2.position.xyz - v0.position.xyz));
-    vec3 n = normalize(b.x * v0.normal.xyz + b.y * v1.normal.xyz + b.z * v2.normal.xyz);
+    ng = normalize(cross(v1.position.xyz - v0.position.xyz, v2.position.xyz - v0.position.xyz));
+    n = normalize(b.x * v0.normal.xyz + b.y * v1.normal.xyz + b.z * v2.normal.xyz);
     vec2 uv = b.x * v0.uv.xy + b.y * v1.uv.xy + b.z * v2.uv.xy;
     rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
-    bool front = dot(ng, d) < 0.0;
+    front = dot(ng, d) < 0.0;
     if (!front)
         ng = -ng;
     if (dot(n, ng) < 0.0)
@@ -47,11 +41,79 @@ void main()
         vec3 tn = textureLod(linear_textures, vec3(uv, float(m.textures.z)), 0.0).xyz;
         n = rb_normal_map(n, tangent, tn * 2.0 - 1.0, m.emissive.w);
     }
-    rb_surface sf = rb_material_eval(m, uv, srgb_textures, linear_textures);
-    vec3 p = o + hit.t * d;
+    sf = rb_material_eval(m, uv, srgb_textures, linear_textures);
+    p = o + hit.t * d;
+}
+
+// The light a hidden hit (p, n, ng) gathers beyond its direct light, by one cosine-weighted ray
+// with random numbers u: what the surface that ray finds sends back but its emission (the
+// emitters' and the environment's light at p is the bake's), per unit albedo.
+vec3 secondary(vec3 p, vec3 n, vec3 ng, vec2 u)
+{
+    vec3 t, b;
+    rb_basis(n, t, b);
+    float r = sqrt(u.x), phi = 2.0 * RB_PI * u.y;
+    vec3 l = normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(1.0 - u.x, 0.0)) * n);
+    if (dot(ng, l) <= 0.0)
+        return vec3(0.0);
+    vec3 o = p + ng * (1e-4 * length(p - g.camera_pos.xyz) + 1e-6 * pc.scene.x);
+    rb_bvh_hit hit;
+    if (!rb_bvh_intersect(o, l, 0.0, 1e30, hit))
+        return vec3(0.0);
+    vec3 q, nq, ngq;
+    bool front;
+    rb_surface sf;
+    surface(o, l, hit, q, nq, ngq, front, sf);
+    vec3 light;
+    bool fed = rb_hybrid_feedback(q, nq, sf.c_diff, sf.f0, light);
+    if (!fed)
+        light = rb_hybrid_baked(hit.extra, hit.bary, !front);
+    return rb_hybrid_shade(q, nq, ngq, -l, sf.c_diff, sf.f0, sf.f90, sf.roughness, light, fed);
+}
+
+void main()
+{
+    uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * RB_HYBRID_BVH_GROUP +
+             gl_LocalInvocationID.x;
+    if (i >= counters.more.z)
+        return;
+    uint slot = queue[i];
+    rb_gpu_hybrid_slot s = slots[slot];
+    ivec2 px = rb_hybrid_slot_pixel(slot);
+    vec3 o = rb_hybrid_origin(px), d = s.a.xyz, weight = s.b.rgb;
+    rb_bvh_hit hit;
+    if (!rb_bvh_intersect(o, d, 0.0, 1e30, hit)) {
+        atomicAdd(counters.more.x, 1u);
+        // weighed against the environment's light sample of the same direction
+        float w = 1.0;
+        if (rb_hybrid_env_lit())
+            w = rb_hybrid_mis(s.b.w, rb_hybrid_env_pdf(imageLoad(gb_normal, px).xyz, d));
+        slots[slot].a = vec4(weight * rb_hybrid_env(d) * w, uintBitsToFloat(RB_HYBRID_MISS));
+        slots[slot].b = vec4(0.0);
+        return;
+    }
+    atomicAdd(counters.rays.w, 1u);
+    vec3 p, n, ng;
+    bool front;
+    rb_surface sf;
+    surface(o, d, hit, p, n, ng, front, sf);
     vec3 direct = weight * sf.emission;
-    vec3 baked = rb_hybrid_baked(hit.extra, hit.bary, !front);
-    vec3 lit = weight * rb_hybrid_shade(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90, sf.roughness, baked);
+    if (max(direct.r, max(direct.g, direct.b)) > 0.0)
+        direct *= rb_hybrid_emit_weight(hit.triangle, d, hit.t, s.b.w);
+    vec3 baked;
+    bool fed = rb_hybrid_feedback(p, n, sf.c_diff, sf.f0, baked);
+    if (!fed) {
+        baked = rb_hybrid_baked(hit.extra, hit.bary, !front);
+        if ((pc.history.z & 2u) != 0u && max(sf.c_diff.r, max(sf.c_diff.g, sf.c_diff.b)) > 0.0) {
+            // the slot's (lobe, ray): its random numbers, rotated apart from the camera ray's
+            uint lobe_ray = slot / (g.size.x * g.size.y);
+            uint lobe = lobe_ray / pc.frame.y;
+            vec2 u = rb_hybrid_u(pc.frame.x * pc.frame.y + lobe_ray % pc.frame.y, px, lobe + 6u);
+            baked += secondary(p, n, ng, u);
+        }
+    }
+    vec3 lit =
+        weight * rb_hybrid_shade(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90, sf.roughness, baked, fed);
     slots[slot].a = vec4(direct, uintBitsToFloat(RB_HYBRID_BVH));
     slots[slot].b = vec4(lit, 0.0);
 }

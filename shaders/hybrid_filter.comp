@@ -23,18 +23,30 @@ void main()
     if (any(greaterThanEqual(uvec2(px), g.size.xy)))
         return;
     uint lobe = pc.frame.z;
-    uint layer = 4u * pc.history.z + 2u * lobe;
+    uint layer = 4u * (pc.history.z & 1u) + 2u * lobe;
     vec4 pos = imageLoad(gb_position, px);
     vec4 d0 = imageLoad(acc, ivec3(px, layer));
     vec3 dsum = vec3(0.0), isum = vec3(0.0);
-    float wsum = 0.0;
+    float wsum = 0.0, dwsum = 0.0;
     if (pos.w > 0.0) {
         vec3 n = imageLoad(gb_normal, px).xyz;
         float radius = float(pc.more.w) * pow(max(d0.w, 1.0), -0.25);
-        if (lobe == RB_HYBRID_SPECULAR)
-            radius *= clamp(2.0 * imageLoad(gb_specular, px).a, 0.0, 1.0);
+        // The direct light's samples are light samples (next-event estimation): their noise is
+        // low and falls fast, and a blur's bias (light spread into a shadow, or down a wall
+        // toward a grazing ceiling) is what would be left, so its radius falls as the samples
+        // (the Cornell box's direct relMSE at frame 31: 0.007 as their square root, 0.0013
+        // unfiltered).
+        float radius_d = float(pc.more.w) / max(d0.w, 1.0);
+        if (lobe == RB_HYBRID_SPECULAR) {
+            float k = clamp(2.0 * imageLoad(gb_specular, px).a, 0.0, 1.0);
+            radius *= k;
+            radius_d *= k;
+        }
         int r = radius < 1.0 ? 0 : int(radius);
+        int rd = radius_d < 1.0 ? 0 : int(radius_d);
         float inv2s2 = 1.0 / (2.0 * max(radius * 0.5, 0.5) * max(radius * 0.5, 0.5));
+        float inv2s2_d = 1.0 / (2.0 * max(radius_d * 0.5, 0.5) * max(radius_d * 0.5, 0.5));
+        r = max(r, rd);
         for (int y = -r; y <= r; y++)
             for (int x = -r; x <= r; x++) {
                 ivec2 q = px + ivec2(x, y);
@@ -46,18 +58,23 @@ void main()
                     continue;
                 vec4 dq = imageLoad(acc, ivec3(q, layer));
                 vec4 iq = imageLoad(acc, ivec3(q, layer + 1u));
-                float w = exp(-float(x * x + y * y) * inv2s2);
-                dsum += w * dq.rgb;
+                float d2 = float(x * x + y * y);
+                if (abs(x) <= rd && abs(y) <= rd) {
+                    float w = exp(-d2 * inv2s2_d);
+                    dsum += w * dq.rgb;
+                    dwsum += w * dq.w;
+                }
+                float w = exp(-d2 * inv2s2);
                 isum += w * iq.rgb;
                 wsum += w * dq.w;
             }
     }
-    vec4 dl = vec4(wsum > 0.0 ? dsum / wsum : vec3(0.0), 0.0);
+    vec4 dl = vec4(dwsum > 0.0 ? dsum / dwsum : vec3(0.0), 0.0);
     vec4 il = vec4(wsum > 0.0 ? isum / wsum : vec3(0.0), 0.0);
     if (lobe == RB_HYBRID_DIFFUSE) {
         imageStore(o_direct_diffuse, px, dl);
         imageStore(o_indirect_diffuse, px, il);
-        vec4 sp = imageLoad(acc, ivec3(px, 4u * pc.history.z + 2u));
+        vec4 sp = imageLoad(acc, ivec3(px, 4u * (pc.history.z & 1u) + 2u));
         // The tiles pass has just written the mask the next frame's rays follow (unless that
         // frame starts the younger accumulator again); a target of 0 marks no tile done.
         bool on = pc.params.x > 0.0;

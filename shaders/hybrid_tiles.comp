@@ -1,6 +1,7 @@
 // hybrid_tiles: the noise of each 16 x 16 tile of the younger accumulator (the one the rays'
 // requests follow), seed 003's sigma = sqrt(E[x^2] - E[x]^2) of each pixel's samples, as the
-// standard error of the pixel's mean, relative to the tile's mean. A tile is done (1) when that
+// standard error of the pixel's mean over the square root of the pixels the filter averages (so
+// the noise of what the output shows), relative to the tile's mean. A tile is done (1) when that
 // is under the noise target and every pixel with a surface has at least 4 samples a lobe it
 // samples; phase 1 erodes the mask by one tile (a tile counts as done only where its neighbours
 // are), for the lobe whose filter reaches across tiles.
@@ -44,7 +45,15 @@ void main()
                 continue;
             }
             float mean = rb_lum(d.rgb + ind.rgb) / d.w;
-            float var = max(ind.w / d.w - mean * mean, 0.0) / d.w;
+            // The variance of the pixel's mean, then of what the output shows: the filter
+            // averages about pi radius^2 pixels' means (a Gaussian of sigma radius / 2, within
+            // its window), with the radius hybrid_filter.comp gives the lobe's indirect light.
+            float radius = float(pc.more.w) * pow(d.w, -0.25);
+            if (lobe == RB_HYBRID_SPECULAR)
+                radius *= clamp(2.0 * imageLoad(gb_specular, px).a, 0.0, 1.0);
+            float window = 2.0 * floor(radius) + 1.0;
+            float n_eff = radius < 1.0 ? 1.0 : min(RB_PI * radius * radius, window * window);
+            float var = max(ind.w / d.w - mean * mean, 0.0) / d.w / n_eff;
             mine += vec4(var, mean, 0.0, d.w < 4.0 ? 1.0 : 0.0);
         }
         mine.z = 1.0;

@@ -4,7 +4,7 @@
 // and its tile is not done. Each ray samples the lobe with fixed quasi-random numbers of
 // (frame, pixel, lobe, ray) and marches in screen space through the hierarchical depth buffer:
 // a hit is shaded from the G-buffer where it lands (with the baked light of the triangle the
-// G-buffer names there); a ray that leaves the screen, turns toward
+// G-buffer names there), the emission it finds weighed by MIS against hybrid_light's samples; a ray that leaves the screen, turns toward
 // the camera past the near plane, passes behind a surface by more than the thickness, or runs
 // out of steps waits in its slot for the BVH.
 #version 460
@@ -188,7 +188,7 @@ void main()
         if (hit.x < 0 || dot(ngq, l) >= 0.0) {
             atomicAdd(counters.rays.z, 1u);
             slots[slot].a = vec4(l, uintBitsToFloat(RB_HYBRID_QUEUED));
-            slots[slot].b = vec4(weight, 0.0);
+            slots[slot].b = vec4(weight, rb_hybrid_pdf(lobe, n, v, l, spec.a));
             continue;
         }
         atomicAdd(counters.rays.y, 1u);
@@ -202,9 +202,19 @@ void main()
         }
         vec4 aq = imageLoad(gb_albedo, hit);
         vec4 nq = imageLoad(gb_normal, hit);
-        vec3 baked = rb_hybrid_baked_at(pq.xyz, ngq, pq.w, aq.w, nq.w < 0.0);
-        vec3 lit = rb_hybrid_shade(pq.xyz, nq.xyz, ngq, -l, aq.rgb, sq.rgb, eq.w, sq.a, baked);
-        slots[slot].a = vec4(weight * eq.rgb, uintBitsToFloat(RB_HYBRID_SCREEN));
+        vec3 baked;
+        bool fed = rb_hybrid_feedback(pq.xyz, nq.xyz, aq.rgb, sq.rgb, baked);
+        if (!fed)
+            baked = rb_hybrid_baked_at(pq.xyz, ngq, pq.w, aq.w, nq.w < 0.0);
+        vec3 lit = rb_hybrid_shade(pq.xyz, nq.xyz, ngq, -l, aq.rgb, sq.rgb, eq.w, sq.a, baked, fed);
+        // Emission found is weighed against the light sample of the same point (its triangle
+        // from the G-buffer).
+        vec3 found = vec3(0.0);
+        if (max(eq.r, max(eq.g, eq.b)) > 0.0)
+            found = weight * eq.rgb *
+                    rb_hybrid_emit_weight(uint(aq.w), l, length(pq.xyz - o),
+                                          rb_hybrid_pdf(lobe, n, v, l, spec.a));
+        slots[slot].a = vec4(found, uintBitsToFloat(RB_HYBRID_SCREEN));
         slots[slot].b = vec4(weight * lit, 0.0);
     }
 }

@@ -12,8 +12,12 @@
 #  4. Error on the still demo (t0450's: animation stopped, camera still) at 160x90: relMSE of
 #     the indirect layer and of the beauty after 1, 8 and 64 frames (frames 0, 7, 63) against
 #     the reference with one bounce (max_bounces=1) at 4096 spp, with the default rays (1 a lobe,
-#     64 samples a pixel) and with 4 rays a lobe (256); the reference's own noise is said.
-#  5. The moving demo's (jobs/demo-hybrid.yaml) frame wall time over its GPU passes' sum,
+#     64 samples a pixel) and with 4 rays a lobe (256), feedback off; the reference's own noise
+#     is said.
+#  5. Error on the still Cornell box at 160x90 with the defaults: relMSE of the beauty, direct
+#     and indirect layers after 1, 8, 32 and 128 frames against the reference's default path
+#     space at 4096 spp, and the rays requested every 8th frame over the shot.
+#  6. The moving demo's (jobs/demo-hybrid.yaml) frame wall time over its GPU passes' sum,
 #     medians over frames 4-11: what the BVH's thread leaves on the frame's critical path.
 # Sizes are small so that this takes about 4 minutes on two shared cores.
 #
@@ -126,7 +130,7 @@ frame_times() {
                   "Tracing, both lobes|Accumulation|Diffuse Filtering|Specular Filtering|" \
                   "Post Processing|other", label, "|")
             split("animate gbuffer|shadow direct|transparency|diffuse_rays|specular_rays|" \
-                  "hiz ray_queue bvh_rays|accumulate tiles|diffuse_filter|specular_filter|" \
+                  "hiz ray_queue bvh_rays light_rays|accumulate tiles|diffuse_filter|specular_filter|" \
                   "output|", passes, "|")
             split("0.7|0.6|1.8|1.4|1.6|-|-|2.5|0.3|1.6|-", seed, "|")
             for (r = 1; r <= rows; r++) {
@@ -198,14 +202,15 @@ fi
 # ---- error after 1, 8 and 64 frames -------------------------------------------------------
 
 # The demo room, its animation stopped and its camera still (tests/integration/t0450-hybrid.sh).
-still_demo "$out/still.yaml" "$still_size" 63 "[direct, indirect]" "{name: hybrid, hybrid: {history: 64}}"
+still_demo "$out/still.yaml" "$still_size" 63 "[direct, indirect]" \
+    "{name: hybrid, hybrid: {history: 64, feedback: false}}"
 # The truth is frame 63 of the reference; frame 62, with independent random numbers, says its
 # own noise: the relMSE between the two is about twice either's.
 "$BUILD/raybundle" reference "$out/still.yaml" --frames 62-63 --spp "$truth_spp" \
     --set integrator.reference.max_bounces=1 --out "$out/truth" -q </dev/null >/dev/null
 truth="$out/truth/frame.0063.exr"
 echo "hybrid error on the still demo at $still_size (history 64: an accumulator spans the 64" \
-    "frames) against the reference with one bounce" \
+    "frames; feedback off: hits lit by direct light) against the reference with one bounce" \
     "(max_bounces=1) at $truth_spp spp ($(field cpu_ms "$out/truth/frame.0063.timing.json" |
         awk '{ printf "%.0f", $1 / 1000 }') s a frame; its own noise, half the relMSE" \
     "between two of its frames: indirect $(relmse "$out/truth/frame.0062.exr" "$truth" indirect |
@@ -226,6 +231,38 @@ for run in default:1:64 4-rays:4:256; do
             rays, (rays > 1 ? "s" : ""), spp, $1, ($1 > 1 ? "s" : " "), $2, $3, $4 }
         END { printf "  %d ray%s a lobe: frame wall median %.1f ms\n", rays, (rays > 1 ? "s" : ""), w }'
 done
+
+# ---- the still Cornell box, defaults, against the reference's default path space -----------
+
+if [ -f "$cornell" ]; then
+    sed -e "s/resolution: \[640, 360\]/resolution: [${still_size%x*}, ${still_size#*x}]/" \
+        -e 's/end: 9,/end: 127,/' -e 's/^integrator: .*/layers: [direct, indirect]\nintegrator: {name: hybrid}/' \
+        "$out/cornell.yaml" >"$out/box.yaml"
+    box_last=127
+    [ "${RB_BENCH_QUICK:-0}" = 1 ] && box_last=7
+    "$BUILD/raybundle" reference "$out/box.yaml" --frames 0 --spp "$truth_spp" --out "$out/btruth" \
+        -q </dev/null >/dev/null
+    render "$out/box.yaml" "$out/box" --frames 0-$box_last
+    echo "hybrid error on the still Cornell box at $still_size (defaults) against the reference" \
+        "(default path space) at $truth_spp spp:"
+    for f in 1 8 32 128; do
+        [ $((f - 1)) -le $box_last ] || continue
+        frame="$out/box/frame.$(printf %04d $((f - 1))).exr"
+        echo "$f $(relmse "$frame" "$out/btruth/frame.0000.exr") $(relmse "$frame" \
+            "$out/btruth/frame.0000.exr" direct) $(relmse "$frame" "$out/btruth/frame.0000.exr" \
+            indirect) $(counts "${frame%.exr}.timing.json" | cut -d' ' -f1)"
+    done | awk '{ printf "  after %3d frame%s: relMSE beauty %.3e, direct %.3e, indirect %.3e; rays requested %d\n",
+        $1, ($1 > 1 ? "s" : " "), $2, $3, $4, $5 }'
+    printf "hybrid rays requested a frame over the still Cornell box (frame:rays):"
+    f=0
+    while [ $f -le $box_last ]; do
+        printf " %d:%s" $f "$(counts "$out/box/frame.$(printf %04d $f).timing.json" | cut -d' ' -f1)"
+        f=$((f + 8))
+    done
+    echo
+else
+    echo "hybrid still Cornell box: skipped, no cornell-box/CornellBox.glb in $SCENES"
+fi
 
 # ---- wall against GPU on the moving demo --------------------------------------------------
 

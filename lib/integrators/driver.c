@@ -83,7 +83,10 @@ enum rb_status rb_integrator_create_with(const struct rb_integrator_desc *desc,
         goto fail;
     double t0 = desc->job->frame_start / desc->job->rate_fps;
     if ((st = rb_moment_evaluate(desc->job, desc->scene, &it->sel, t0, &it->cur, err)) ||
-        (st = rb_frame_init(desc->gpu, desc, &it->cur, it->history_frames + 1, &it->frame, err)) ||
+        (st = rb_frame_init(desc->gpu, desc, &it->cur,
+                            (ops->slot_frames ? ops->slot_frames(desc->job) : it->history_frames) +
+                                1,
+                            &it->frame, err)) ||
         (st = ops->create(it, &it->state, err)))
         goto fail;
     *out = it;

@@ -1,12 +1,29 @@
 /* The hybrid integrator: deferred path tracing, seed 003 (DESIGN.md "hybrid"). Its frame:
  *   animate -> gbuffer -> shadow -> direct -> hiz -> diffuse_rays -> specular_rays -> ray_queue
- *   -> bvh_rays -> accumulate -> tiles -> diffuse_filter -> specular_filter -> output
+ *   -> bvh_rays -> light_rays -> accumulate -> tiles -> diffuse_filter -> specular_filter ->
+ *   output
  * Rasterize what can be rasterized (the G-buffer, shadow maps), sample each lobe of the BRDF at
  * every pixel that still wants samples, trace in screen space first and through a BVH (built on
  * the CPU with Embree's builder, lib/bvh, on a thread of its own, from the objects of best score
  * under a triangle budget, an object that does not fit whole by a coarser version) what the
  * screen cannot answer, shade both kinds of hit alike, accumulate over time and filter with a
  * kernel that shrinks as samples grow.
+ *
+ * Next-event estimation at the camera vertex. Each ray a lobe traces also takes one light
+ * sample (light_rays): an emissive triangle by emitted power (the emitter table, built on the
+ * device each frame from the frame's vertices), a point uniformly on it, visibility by a shadow
+ * ray through the BVH. A BRDF ray that finds an emitter, in screen space or in the BVH, and the
+ * light sample are weighed by the power heuristic (beta 2, the reference's), per lobe: each lobe
+ * is its own integral, sampled by its own rays (pdf rb_hybrid_pdf) and by the light samples.
+ * The environment has its light sample too, by the importance table of its map (the
+ * reference's, env_init) or cosine-weighted without one, weighed against the rays that miss.
+ *
+ * Every bounce (integrator.hybrid.feedback). A hit reflects what the pixel that saw it in the
+ * previous frame gathered, diffuse and specular, direct and indirect (rb_hybrid_feedback),
+ * read from this frame's younger accumulator and never on the frame that starts it again; a hit
+ * the previous frame did not see takes its baked light and one secondary diffuse ray through the
+ * BVH. So each frame adds a bounce, and what an accumulator holds still depends only on the
+ * frames since its start: the feedback keeps the history contract below.
  *
  * History. Two accumulators take every sample; accumulator A starts again on the frames
  * sequence_start + kW, B on sequence_start + kW + W/2 (and both on sequence_start), W =
@@ -112,11 +129,27 @@ struct hybrid {
     uint32_t bake_capacity;
     uint32_t word_vec4s; /* the bake words' room, in vec4s (0 without a bake) */
     bool has_bake;
+    /* next-event estimation: the emissive triangles (global indices), after the triangles in
+     * the device's index buffer */
+    uint32_t *emitters;
+    uint32_t emitter_count;
+    /* the environment's importance table (hybrid.glsl), after the emitters; 0 floats without a
+     * map */
+    float *env_table;
+    size_t env_floats;
 };
 
 static uint32_t history_frames(const struct rb_job *job)
 {
     return job->integrator.hybrid.history;
+}
+
+/* The history spans W frames, but a frame reads the vertices of its own and the previous frame
+ * only (motion vectors): two animation slots, whatever W. */
+static uint32_t slot_frames(const struct rb_job *job)
+{
+    (void)job;
+    return 1;
 }
 
 static void destroy(struct rb_integrator *it, void *state)
@@ -166,6 +199,8 @@ static void destroy(struct rb_integrator *it, void *state)
     free(d->built);
     free(d->indices);
     free(d->objects);
+    free(d->emitters);
+    free(d->env_table);
     free(d);
 }
 
@@ -296,13 +331,14 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
         {"hierarchical depth", cells * 2 * sizeof(float)},
         {"ray slots", h->slot_count * sizeof(struct rb_gpu_hybrid_slot)},
         {"ray queue", (uint64_t)d->queue_capacity * sizeof(uint32_t)},
-        {"queue blocks", blocks * sizeof(uint32_t)},
+        {"queue blocks and emitter table", (blocks + d->emitter_count) * sizeof(uint32_t)},
         {"BVH nodes", (uint64_t)d->node_capacity * sizeof(struct rb_gpu_bvh_node)},
         {"BVH triangles and baked light",
          (uint64_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle) +
              ((uint64_t)d->word_vec4s + d->bake_capacity) * 16},
         {"noise tiles", 2 * tiles * sizeof(float)},
-        {"triangles", all_triangles(d) * 3 * sizeof(uint32_t)},
+        {"triangles, emitters and the environment's table",
+         (all_triangles(d) * 3 + d->emitter_count + d->env_floats) * sizeof(uint32_t)},
     };
     enum rb_status st;
     for (size_t i = 0; i < COUNT(bound); i++)
@@ -328,7 +364,11 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
         (st = rb_frame_buffer(gpu, bound[7].bytes ? bound[7].bytes : 4, storage, true,
                               "hybrid.indices", &h->indices, err)))
         return st;
-    memcpy(h->indices.mapped, d->indices, bound[7].bytes);
+    memcpy(h->indices.mapped, d->indices, all_triangles(d) * 3 * sizeof(uint32_t));
+    memcpy((uint32_t *)h->indices.mapped + all_triangles(d) * 3, d->emitters,
+           (size_t)d->emitter_count * sizeof(uint32_t));
+    memcpy((uint32_t *)h->indices.mapped + all_triangles(d) * 3 + d->emitter_count, d->env_table,
+           d->env_floats * sizeof(float));
     const VkImageUsageFlags image_use = VK_IMAGE_USAGE_STORAGE_BIT;
     static const char *const acc_names[2] = {"hybrid.acc0", "hybrid.acc1"};
     static const char *const light_names[RB_BDPT_LIGHT_COUNT] = {
@@ -443,6 +483,105 @@ static enum rb_status worker_start(struct hybrid *d, struct rb_err *err)
     return RB_OK;
 }
 
+/* The emitter table's triangles (hybrid_shared.h): those of every instance whose material's
+ * emissive factor is not black, as the reference and bdpt list them. */
+static enum rb_status emitters_init(struct rb_integrator *it, struct hybrid *d, struct rb_err *err)
+{
+    const struct rb_scene *scene = it->scene;
+    const struct rb_scene_pose *pose = it->cur.pose;
+    uint64_t count = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        count = 0;
+        for (uint32_t i = 0; i < d->object_count; i++) {
+            uint32_t m = scene->primitives[pose->instances[i].primitive].material;
+            const float *e = m < scene->material_count ? scene->materials[m].emissive : NULL;
+            if (!e || !(e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f))
+                continue;
+            for (uint32_t k = 0; k < d->objects[i].triangle_count; k++, count++)
+                if (pass)
+                    d->emitters[count] = d->objects[i].first_triangle + k;
+        }
+        if (pass || !count)
+            break;
+        if (count > UINT32_MAX / 8 || !(d->emitters = malloc((size_t)count * sizeof(*d->emitters))))
+            return rb_errf(err, RB_E_NOMEM, "out of memory for %llu emissive triangles",
+                           (unsigned long long)count);
+    }
+    d->emitter_count = (uint32_t)count;
+    return RB_OK;
+}
+
+/* A texel's luminance as the reference's importance table reads it: u repeats, v clamps. */
+static float env_luminance(const struct rb_integrator *it, int64_t x, int64_t y)
+{
+    int64_t w = it->env_width_px, h = it->env_height_px;
+    x %= w;
+    if (x < 0)
+        x += w;
+    y = y < 0 ? 0 : (y >= h ? h - 1 : y);
+    const float *t = it->env_rgba + ((size_t)y * (size_t)w + (size_t)x) * 4;
+    float lum =
+        0.2126f * fmaxf(t[0], 0.0f) + 0.7152f * fmaxf(t[1], 0.0f) + 0.0722f * fmaxf(t[2], 0.0f);
+    return lum == lum && lum < INFINITY ? lum : 0.0f;
+}
+
+/* The environment's light samples: whether it is lit, and with a map the importance table of
+ * its texels, computed as the reference's (lib/reference/lights.c, rb_ref_env_init) so that both
+ * sample the same directions with the same pdf: the marginal CDF over rows (h + 1 floats), each
+ * row's CDF (w + 1 a row), each texel's probability (w h). */
+static enum rb_status env_init(struct rb_integrator *it, struct hybrid *d, struct rb_err *err)
+{
+    const struct rb_job *job = it->job;
+    const float *c = job->environment.color;
+    bool lit = job->environment.intensity > 0.0f &&
+               (it->env_rgba || c[0] > 0.0f || c[1] > 0.0f || c[2] > 0.0f);
+    d->h.has_env_light = lit;
+    if (!lit || !it->env_rgba)
+        return RB_OK;
+    uint32_t w = it->env_width_px, h = it->env_height_px;
+    d->env_floats = (size_t)(h + 1) + (size_t)h * (w + 1) + (size_t)w * h;
+    float *t = d->env_table = malloc(d->env_floats * sizeof(float));
+    double *row_sum = malloc(((size_t)h + 1) * sizeof(double));
+    if (!t || !row_sum) {
+        free(row_sum);
+        return rb_errf(err, RB_E_NOMEM, "out of memory for the environment's importance table");
+    }
+    float *marginal = t, *conditional = t + h + 1, *texel_pdf = conditional + (size_t)h * (w + 1);
+    double total = 0.0;
+    for (uint32_t y = 0; y < h; y++) {
+        float st = sinf(RB_PI * ((float)y + 0.5f) / (float)h);
+        double sum = 0.0;
+        float *cdf = conditional + (size_t)y * (w + 1);
+        cdf[0] = 0.0f;
+        for (uint32_t x = 0; x < w; x++) {
+            float m = 0.0f;
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++)
+                    m = fmaxf(m, env_luminance(it, (int64_t)x + dx, (int64_t)y + dy));
+            float wgt = m * st;
+            texel_pdf[(size_t)y * w + x] = wgt;
+            sum += wgt;
+            cdf[x + 1] = (float)sum;
+        }
+        for (uint32_t x = 1; x <= w; x++)
+            cdf[x] = sum > 0.0 ? (float)(cdf[x] / sum) : (float)x / (float)w;
+        cdf[w] = 1.0f;
+        row_sum[y] = sum;
+        total += sum;
+    }
+    double acc = 0.0;
+    marginal[0] = 0.0f;
+    for (uint32_t y = 0; y < h; y++) {
+        acc += row_sum[y];
+        marginal[y + 1] = total > 0.0 ? (float)(acc / total) : 0.0f;
+    }
+    marginal[h] = 1.0f;
+    for (size_t i = 0; i < (size_t)w * h; i++)
+        texel_pdf[i] = total > 0.0 ? (float)(texel_pdf[i] / total) : 0.0f;
+    free(row_sum);
+    return RB_OK;
+}
+
 static enum rb_status create(struct rb_integrator *it, void **state, struct rb_err *err)
 {
     struct hybrid *d = calloc(1, sizeof(*d));
@@ -454,7 +593,8 @@ static enum rb_status create(struct rb_integrator *it, void **state, struct rb_e
     enum rb_status st;
     if ((st = rb_base_create(it, &d->base, err)) ||
         (st = rb_pass_hybrid_create(it->gpu, &d->passes, err)) ||
-        (st = geometry_init(it, d, err)) || (st = bake_init(it, d, err)) ||
+        (st = geometry_init(it, d, err)) || (st = emitters_init(it, d, err)) ||
+        (st = env_init(it, d, err)) || (st = bake_init(it, d, err)) ||
         (st = create_resources(it, d, err)) || (st = worker_start(d, err))) {
         destroy(it, d);
         return st;
@@ -865,15 +1005,18 @@ static void set_push(const struct rb_integrator *it, struct hybrid *d, int frame
     float dx = hi.x - lo.x, dy = hi.y - lo.y, dz = hi.z - lo.z;
     *p = (struct rb_gpu_hybrid_push){
         .frame = {(uint32_t)frame, s->rays, 0, (uint32_t)(d->h.slot_count / 2)},
-        .history = {rel % w == 0, rel == 0 || (rel >= half && (rel - half) % w == 0), b_older,
-                    !b_older},
+        .history = {rel % w == 0, rel == 0 || (rel >= half && (rel - half) % w == 0),
+                    b_older | (s->feedback ? 2u : 0u), !b_older},
         .sizes = {s->spp, s->screen_steps, d->queue_capacity, d->h.hiz_levels},
         .more = {0, 0, 0, s->filter_radius_px},
         .params = {s->noise, s->thickness, s->filter_depth, s->filter_normal},
         .scene = {sqrtf(dx * dx + dy * dy + dz * dz), 1e-4f, 0.0f, s->check_screen ? 1.0f : 0.0f},
         /* the G-buffer's float holds a triangle's index exactly below 2^24 */
-        .bake = {d->has_bake, d->triangle_count <= (1u << 24), 12 * d->tri_capacity, 0},
+        .bake = {d->has_bake, d->triangle_count <= (1u << 24), 12 * d->tri_capacity,
+                 d->emitter_count},
     };
+    uint32_t emitters_at = (uint32_t)(all_triangles(d) * 3);
+    memcpy(&p->scene[2], &emitters_at, sizeof(emitters_at));
     d->h.cur = (uint32_t)frame & 1u;
 }
 
@@ -979,6 +1122,7 @@ static void collect(struct rb_integrator *it, void *state, struct rb_frame_resul
 const struct rb_integrator_ops rb_integrator_hybrid = {
     .name = "hybrid",
     .history_frames = history_frames,
+    .slot_frames = slot_frames,
     .create = create,
     .prepare = prepare,
     .record = record,

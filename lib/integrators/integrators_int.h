@@ -36,6 +36,9 @@ struct rb_integrator_ops {
     bool has_emitter_lights;
     /* Earlier frames a frame's state depends on (the history contract in integrators.h). */
     uint32_t (*history_frames)(const struct rb_job *job);
+    /* Optional: the earlier frames whose animation slots (vertices) a frame reads, when fewer
+     * than history_frames (hybrid: the previous frame's alone); the driver keeps one slot more. */
+    uint32_t (*slot_frames)(const struct rb_job *job);
     /* Creates the integrator's own passes and resources once the driver's frame exists. */
     enum rb_status (*create)(struct rb_integrator *it, void **state, struct rb_err *err);
     /* Optional: the frame's CPU work before it is recorded (hybrid: its BVH), which may fail. */

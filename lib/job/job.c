@@ -251,7 +251,7 @@ static const struct key keys[] = {
       "hybrid: rays each lobe (diffuse, specular) of a pixel may request a frame"),
     K("integrator.hybrid.spp", KT_UINT, JOB(integrator.hybrid.spp), 1, 65536, "64", 0,
       "hybrid: samples a lobe of a pixel aims for, scaled down by its material and direct light"),
-    K("integrator.hybrid.history", KT_UINT, JOB(integrator.hybrid.history), 2, 1024, "32", 0,
+    K("integrator.hybrid.history", KT_UINT, JOB(integrator.hybrid.history), 2, 1024, "128", 0,
       "hybrid: frames one accumulator spans before it starts again (two, staggered by half)"),
     K("integrator.hybrid.noise", KT_FLOAT, JOB(integrator.hybrid.noise), 0, NOHI, "0.02", 0,
       "hybrid: relative noise of a 16x16 tile below which it requests no more rays; 0: never"),
@@ -273,6 +273,8 @@ static const struct key keys[] = {
       "65536", 0, "hybrid: baked light points beyond three a side of each of the BVH's triangles"),
     K("integrator.hybrid.bake_samples", KT_UINT, JOB(integrator.hybrid.bake_samples), 0, 65536,
       "32", 0, "hybrid: light samples per baked point; 0: no bake"),
+    K("integrator.hybrid.feedback", KT_BOOL, JOB(integrator.hybrid.feedback), NOLO, NOHI, "true", 0,
+      "hybrid: hits also reflect the light their pixels gathered (every bounce); false: one"),
     K("integrator.hybrid.check_screen", KT_BOOL, JOB(integrator.hybrid.check_screen), NOLO, NOHI,
       "false", 0, "hybrid: also trace screen-space hits through the BVH and count agreement"),
     K("integrator.hybrid.queue_rays", KT_UINT, JOB(integrator.hybrid.queue_rays), 0, UINT32_MAX,
@@ -1460,6 +1462,7 @@ void rb_job_rehash(struct rb_job *job)
         h = h_u32(h, y->filter_radius_px);
         h = h_f32(h, y->filter_depth);
         h = h_f32(h, y->filter_normal);
+        h = h_u32(h, y->feedback);
     }
     job->hash = h;
 }

@@ -189,7 +189,7 @@ struct rb_job {
         struct rb_job_hybrid {
             uint32_t rays;             /* rays a lobe per pixel and frame, default 1 */
             uint32_t spp;              /* samples a lobe a pixel aims for, default 64 */
-            uint32_t history;          /* W: frames an accumulator spans, default 32 */
+            uint32_t history;          /* W: frames an accumulator spans, default 128 */
             float noise;               /* tile noise target (relative error), default 0.02 */
             float thickness;           /* screen hit depth tolerance, relative, default 0.03 */
             uint32_t screen_steps;     /* most hierarchical depth steps a ray, default 96 */
@@ -199,6 +199,7 @@ struct rb_job {
             uint32_t bake_texels;      /* baked light points past the vertices, 65536 */
             uint32_t bake_samples;     /* light samples a baked point, default 32; 0: none */
             bool check_screen;         /* screen hits traced again through the BVH */
+            bool feedback;             /* hits reflect what their pixels gathered, default true */
             uint32_t queue_rays;       /* BVH queue capacity; 0: every ray of a frame */
             uint32_t filter_radius_px; /* the filter's radius at one sample, default 6 */
             float filter_depth;        /* relative depth difference that stops it, 0.05 */

@@ -1,21 +1,24 @@
 /* hybrid: the compute passes of the hybrid integrator's frame (seed 003; DESIGN.md "hybrid"):
- * the hierarchical depth buffer, each lobe's rays and their screen-space trace, the queue of
- * rays for the BVH and its trace, the accumulators, the noise tiles and the filter. Every pass
- * shares one binding table (hybrid.glsl declares it), so one function binds them all. */
+ * the hierarchical depth buffer, the emitter table, each lobe's rays and their screen-space
+ * trace, the queue of rays for the BVH and its trace, the light samples, the accumulators, the
+ * noise tiles and the filter. Every pass shares one binding table (hybrid.glsl declares it), so one
+ * function binds them all. */
 #include "passes/passes_int.h"
 
 #include <stdlib.h>
 
 #include "hybrid_accumulate.comp.h"
 #include "hybrid_bvh.comp.h"
+#include "hybrid_emitters.comp.h"
 #include "hybrid_filter.comp.h"
 #include "hybrid_hiz.comp.h"
+#include "hybrid_light.comp.h"
 #include "hybrid_queue.comp.h"
 #include "hybrid_tiles.comp.h"
 #include "hybrid_trace.comp.h"
 
 struct rb_pass_hybrid {
-    struct rb_pass hiz, trace, queue, bvh, accumulate, tiles, filter;
+    struct rb_pass hiz, emitters, trace, queue, bvh, light, accumulate, tiles, filter;
 };
 
 static const struct rb_pass_binding bindings[] = {
@@ -75,6 +78,8 @@ enum rb_status rb_pass_hybrid_create(struct rb_gpu *gpu, struct rb_pass_hybrid *
         (st = COMPUTE(trace, rb_spv_hybrid_trace_comp)) ||
         (st = COMPUTE(queue, rb_spv_hybrid_queue_comp)) ||
         (st = COMPUTE(bvh, rb_spv_hybrid_bvh_comp)) ||
+        (st = COMPUTE(emitters, rb_spv_hybrid_emitters_comp)) ||
+        (st = COMPUTE(light, rb_spv_hybrid_light_comp)) ||
         (st = COMPUTE(accumulate, rb_spv_hybrid_accumulate_comp)) ||
         (st = COMPUTE(tiles, rb_spv_hybrid_tiles_comp)) ||
         (st = COMPUTE(filter, rb_spv_hybrid_filter_comp))) {
@@ -92,7 +97,9 @@ void rb_pass_hybrid_destroy(struct rb_pass_hybrid *p)
     rb_pass_release(&p->filter);
     rb_pass_release(&p->tiles);
     rb_pass_release(&p->accumulate);
+    rb_pass_release(&p->light);
     rb_pass_release(&p->bvh);
+    rb_pass_release(&p->emitters);
     rb_pass_release(&p->queue);
     rb_pass_release(&p->trace);
     rb_pass_release(&p->hiz);
@@ -199,6 +206,12 @@ static void record_trace(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
                               VK_ACCESS_2_SHADER_STORAGE_READ_BIT |
                                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
     }
+    if (lobe == RB_HYBRID_DIFFUSE && h->push.bake[3]) {
+        /* the emitter table, which the rays' MIS weights and the light samples read */
+        bind(&p->emitters, cmd, frame, slot, h);
+        vkCmdDispatch(cmd, 1, 1, 1);
+        compute_to_compute(cmd);
+    }
     h->push.frame[2] = lobe;
     bind(&p->trace, cmd, frame, slot, h);
     vkCmdDispatch(cmd, groups(frame->width_px, 8), groups(frame->height_px, 8), 1);
@@ -231,6 +244,16 @@ static void record_bvh(struct rb_pass_hybrid *p, VkCommandBuffer cmd, const stru
     bind(&p->bvh, cmd, frame, slot, h);
     vkCmdDispatchIndirect(cmd, h->counters.buffer,
                           offsetof(struct rb_gpu_hybrid_counters, dispatch));
+}
+
+static void record_light(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
+                         const struct rb_frame *frame, const struct rb_frame_slot *slot,
+                         struct rb_hybrid_frame *h)
+{
+    if (!h->push.bake[3] && !h->has_env_light)
+        return; /* nothing emits and the environment is black: no light sample */
+    bind(&p->light, cmd, frame, slot, h);
+    vkCmdDispatch(cmd, groups(frame->width_px, 8), groups(frame->height_px, 8), 1);
 }
 
 static void record_accumulate(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
@@ -271,6 +294,7 @@ const char *const rb_pass_hybrid_names[RB_HYBRID_PASS_COUNT] = {
     [RB_HYBRID_PASS_SPECULAR_RAYS] = "specular_rays",
     [RB_HYBRID_PASS_RAY_QUEUE] = "ray_queue",
     [RB_HYBRID_PASS_BVH_RAYS] = "bvh_rays",
+    [RB_HYBRID_PASS_LIGHT_RAYS] = "light_rays",
     [RB_HYBRID_PASS_ACCUMULATE] = "accumulate",
     [RB_HYBRID_PASS_TILES] = "tiles",
     [RB_HYBRID_PASS_DIFFUSE_FILTER] = "diffuse_filter",
@@ -291,6 +315,7 @@ void rb_pass_hybrid_record(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
         return;
     case RB_HYBRID_PASS_RAY_QUEUE: record_queue(p, cmd, frame, slot, h); return;
     case RB_HYBRID_PASS_BVH_RAYS: record_bvh(p, cmd, frame, slot, h); return;
+    case RB_HYBRID_PASS_LIGHT_RAYS: record_light(p, cmd, frame, slot, h); return;
     case RB_HYBRID_PASS_ACCUMULATE: record_accumulate(p, cmd, frame, slot, h); return;
     case RB_HYBRID_PASS_TILES: record_tiles(p, cmd, frame, slot, h); return;
     case RB_HYBRID_PASS_DIFFUSE_FILTER:

@@ -481,12 +481,14 @@ struct rb_hybrid_frame {
     struct rb_gpu_buffer queue;    /* uint [queue capacity] */
     struct rb_gpu_buffer blocks;   /* uint per block of slots */
     struct rb_gpu_buffer bvh_nodes, bvh_tris;
-    struct rb_gpu_buffer indices; /* the frame's triangles, then the BVH's coarser objects' */
+    struct rb_gpu_buffer indices; /* the frame's triangles, then the BVH's coarser objects',
+                                   * the emitter list, the environment's importance table */
     struct rb_gpu_buffer tiles;   /* float [2 x tiles] */
     struct rb_gpu_image acc[2];   /* RB_HYBRID_ACC_LAYERS layers; frame f writes f mod 2 */
     struct rb_gpu_image stats;    /* samples (diffuse, specular), tile mask */
     struct rb_gpu_image light[RB_BDPT_LIGHT_COUNT]; /* what the output pass textures */
     uint32_t cur;                                   /* the accumulator written: frame mod 2 */
+    bool has_env_light; /* the environment is lit: light samples of it (hybrid_light.comp) */
 };
 
 struct rb_pass_hybrid;
@@ -497,10 +499,12 @@ void rb_pass_hybrid_destroy(struct rb_pass_hybrid *p);
  * the first RB_HYBRID_PASS_TILES + 1 of them in a warm-up). */
 enum rb_hybrid_pass {
     RB_HYBRID_PASS_HIZ = 0,         /* the hierarchical depth buffer, level by level */
-    RB_HYBRID_PASS_DIFFUSE_RAYS,    /* zeroes the counters; requests, screen trace, screen hits */
+    RB_HYBRID_PASS_DIFFUSE_RAYS,    /* zeroes the counters; the emitter table; requests, screen
+                                     * trace, screen hits */
     RB_HYBRID_PASS_SPECULAR_RAYS,   /* the same for the specular lobe */
     RB_HYBRID_PASS_RAY_QUEUE,       /* the rays for the BVH, in slot order (three dispatches) */
     RB_HYBRID_PASS_BVH_RAYS,        /* the queued rays through the BVH (indirect dispatch) */
+    RB_HYBRID_PASS_LIGHT_RAYS,      /* a light sample per traced ray (next-event estimation) */
     RB_HYBRID_PASS_ACCUMULATE,      /* both accumulators */
     RB_HYBRID_PASS_TILES,           /* the tile mask, then its erosion */
     RB_HYBRID_PASS_DIFFUSE_FILTER,  /* the diffuse lobe's light for the output pass */

@@ -126,6 +126,18 @@ vec2 rb_hybrid_u(uint k, ivec2 px, uint lobe)
     return vec2(r >> 8) * (1.0 / 16777216.0);
 }
 
+// The three random numbers of light sample k of a pixel's lobe: point k of the R3 sequence
+// (Roberts' recurrence on the root of x^4 = x + 1), rotated by the pixel's own shift as
+// rb_hybrid_u is, in 32-bit fixed point: the emitter's pick (z) stays independent of the point
+// on it (xy), which two rotations of one 2D sequence would not be.
+vec3 rb_hybrid_u3(uint k, ivec2 px, uint lobe)
+{
+    uint h = rb_hash(uint(px.y) * 0x9e3779b9u ^ rb_hash(uint(px.x) + 0x632be5abu * (lobe + 1u)));
+    uvec3 r = uvec3(k * 3518319154u + h, k * 2882110344u + rb_hash(h),
+                    k * 2360945575u + rb_hash(h ^ 0x5bd1e995u));
+    return vec3(r >> 8) * (1.0 / 16777216.0);
+}
+
 // An orthonormal frame around n (Duff et al. 2017).
 void rb_basis(vec3 n, out vec3 t, out vec3 b)
 {
@@ -195,6 +207,173 @@ bool rb_hybrid_sample(uint lobe, vec3 n, vec3 ng, vec3 v, vec3 f0, float f90, fl
         weight = F * (4.0 * V * ndv * ndl / rb_g1(ndv, alpha)) / rb_spec_map(f0);
     }
     return dot(ng, l) > 0.0 && dot(n, l) > 0.0;
+}
+
+// The lobe's pdf (solid angle) of sampling direction l with rb_hybrid_sample: cos / pi for the
+// diffuse lobe, GGX's visible normals' G1(v) D / (4 n.v) for the specular one. The MIS weights
+// of a BRDF ray and of a light sample both use it, so they add up to one.
+float rb_hybrid_pdf(uint lobe, vec3 n, vec3 v, vec3 l, float roughness)
+{
+    float ndl = dot(n, l);
+    if (!(ndl > 0.0))
+        return 0.0;
+    if (lobe == RB_HYBRID_DIFFUSE)
+        return ndl / RB_PI;
+    vec3 lv = l + v;
+    if (!(dot(lv, lv) > 0.0))
+        return 0.0;
+    vec3 h = normalize(lv);
+    float alpha = max(roughness * roughness, 1e-4), a2 = alpha * alpha;
+    float ndh = max(dot(n, h), 0.0);
+    float dd = ndh * ndh * (a2 - 1.0) + 1.0;
+    float ndv = max(dot(n, v), 1e-4);
+    return rb_g1(ndv, alpha) * (a2 / (RB_PI * dd * dd)) / (4.0 * ndv);
+}
+
+// The power heuristic (beta = 2, as the reference's) of a technique with pdf a against one with
+// pdf b, as a ratio so that a mirror's huge pdf neither overflows nor makes NaN.
+float rb_hybrid_mis(float a, float b)
+{
+    a = min(a, 1e30);
+    b = min(b, 1e30);
+    if (!(a > 0.0))
+        return 0.0;
+    float r = b / a;
+    return 1.0 / (1.0 + r * r);
+}
+
+// The emitter table (hybrid_shared.h): where its running sums start in `blocks`, its total.
+uint rb_hybrid_cdf_base()
+{
+    return (2u * pc.frame.w + RB_HYBRID_QUEUE_GROUP - 1u) / RB_HYBRID_QUEUE_GROUP;
+}
+
+float rb_hybrid_emit_total()
+{
+    return pc.bake.w == 0u ? 0.0 : uintBitsToFloat(blocks[rb_hybrid_cdf_base() + pc.bake.w - 1u]);
+}
+
+float rb_hybrid_luminance(vec3 c)
+{
+    return dot(max(c, vec3(0.0)), vec3(0.2126, 0.7152, 0.0722));
+}
+
+// The light sample's pdf (solid angle, from the ray's origin) of a point of emissive material m
+// at distance dist whose face is at cosine cos_l to the ray: the emitter chosen by power, the
+// point uniformly on it, so per unit area the emissive factor's luminance over the total power.
+float rb_hybrid_light_pdf(rb_gpu_material m, float dist, float cos_l)
+{
+    float total = rb_hybrid_emit_total();
+    float p_area = total > 0.0 ? rb_hybrid_luminance(m.emissive.rgb) / total : 0.0;
+    return cos_l > 0.0 ? p_area * dist * dist / cos_l : 1e30;
+}
+
+// The environment's light samples (DESIGN.md "hybrid", rays), as the reference takes them
+// (lib/reference/lights.c): with a map, by the importance table of its texels (each the largest
+// luminance of its 3 x 3 neighbourhood times sin(theta)), which lib/integrators/hybrid.c writes
+// into `indices` after the emitter list: the marginal CDF over rows (h + 1), each row's CDF
+// (w + 1 a row), then each texel's probability (w h), as float bits; without a map, cosine-
+// weighted around the shading normal. None when the environment is black (rb_hybrid_env_lit).
+bool rb_hybrid_env_lit()
+{
+    return g.env.x > 0.0 &&
+           (g.env.z > 0.5 || max(g.env_color.r, max(g.env_color.g, g.env_color.b)) > 0.0);
+}
+
+uint rb_hybrid_env_table()
+{
+    return floatBitsToUint(pc.scene.z) + pc.bake.w;
+}
+
+float rb_hybrid_table(uint i)
+{
+    return uintBitsToFloat(indices[i]);
+}
+
+// The reference's search: the last i in [0, n) with cdf[i] <= u, skipping empty intervals.
+uint rb_hybrid_search(uint base, uint n, float u)
+{
+    uint lo = 0u, hi = n;
+    while (hi - lo > 1u) {
+        uint mid = lo + (hi - lo) / 2u;
+        if (rb_hybrid_table(base + mid) <= u)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    while (lo + 1u < n && !(rb_hybrid_table(base + lo + 1u) > rb_hybrid_table(base + lo)))
+        lo++;
+    return lo;
+}
+
+// The pdf (solid angle) of the environment's light sample of direction d at shading normal n.
+float rb_hybrid_env_pdf(vec3 n, vec3 d)
+{
+    if (!rb_hybrid_env_lit())
+        return 0.0;
+    if (g.env.z <= 0.5)
+        return max(dot(n, d), 0.0) / RB_PI;
+    uvec2 size = uvec2(textureSize(env_map, 0));
+    vec2 uv = rb_equirect_uv(d, g.env.y);
+    if (any(isnan(uv)))
+        return 0.0;
+    uvec2 t = uvec2(clamp(floor(uv * vec2(size)), vec2(0.0), vec2(size) - 1.0));
+    float st = sin(uv.y * RB_PI);
+    if (!(st > 0.0))
+        return 0.0;
+    uint pdfs = rb_hybrid_env_table() + (size.y + 1u) + size.y * (size.x + 1u);
+    float p_uv = rb_hybrid_table(pdfs + t.y * size.x + t.x) * float(size.x) * float(size.y);
+    return p_uv / (2.0 * RB_PI * RB_PI * st);
+}
+
+// The environment's light sample of random numbers u at shading normal n: its direction d and
+// pdf (0: none).
+float rb_hybrid_env_sample(vec3 n, vec2 u, out vec3 d)
+{
+    d = n;
+    if (!rb_hybrid_env_lit())
+        return 0.0;
+    if (g.env.z <= 0.5) {
+        vec3 t, b;
+        rb_basis(n, t, b);
+        float r = sqrt(u.x), phi = 2.0 * RB_PI * u.y;
+        d = normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(1.0 - u.x, 0.0)) * n);
+        return rb_hybrid_env_pdf(n, d);
+    }
+    uvec2 size = uvec2(textureSize(env_map, 0));
+    uint marginal = rb_hybrid_env_table(), rows = marginal + size.y + 1u;
+    uint y = rb_hybrid_search(marginal, size.y, u.x);
+    float r0 = rb_hybrid_table(marginal + y), r1 = rb_hybrid_table(marginal + y + 1u);
+    float fy = r1 > r0 ? (u.x - r0) / (r1 - r0) : 0.5;
+    uint row = rows + y * (size.x + 1u);
+    uint x = rb_hybrid_search(row, size.x, u.y);
+    float c0 = rb_hybrid_table(row + x), c1 = rb_hybrid_table(row + x + 1u);
+    float fx = c1 > c0 ? (u.y - c0) / (c1 - c0) : 0.5;
+    float mu = (float(x) + clamp(fx, 0.0, 1.0)) / float(size.x);
+    float mv = (float(y) + clamp(fy, 0.0, 1.0)) / float(size.y);
+    // lights.c's equirect_dir: the direction of map coordinates (mu, mv), rotation undone
+    float theta = mv * RB_PI, phi = (mu - 0.5) * 2.0 * RB_PI, st = sin(theta);
+    vec3 m = vec3(st * sin(phi), cos(theta), -st * cos(phi));
+    float c = cos(-g.env.y), sn = sin(-g.env.y);
+    d = vec3(c * m.x - sn * m.z, m.y, sn * m.x + c * m.z);
+    if (!(st > 0.0))
+        return 0.0;
+    return rb_hybrid_env_pdf(n, d);
+}
+
+// The MIS weight of emission a BRDF ray of pdf pdf_brdf found on global triangle t, at distance
+// dist from its origin, along l: against the light sample that could have found the same point.
+float rb_hybrid_emit_weight(uint t, vec3 l, float dist, float pdf_brdf)
+{
+    if (pc.bake.w == 0u)
+        return 1.0;
+    rb_gpu_vertex v0 = verts[indices[3u * t]];
+    rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
+    vec3 ne = cross(verts[indices[3u * t + 1u]].position.xyz - v0.position.xyz,
+                    verts[indices[3u * t + 2u]].position.xyz - v0.position.xyz);
+    float len = length(ne);
+    float cos_l = len > 0.0 ? abs(dot(ne / len, l)) : 0.0;
+    return rb_hybrid_mis(pdf_brdf, rb_hybrid_light_pdf(m, dist, cos_l));
 }
 
 vec3 rb_hybrid_env(vec3 d)
@@ -283,12 +462,14 @@ vec3 rb_hybrid_baked_at(vec3 p, vec3 ng, float depth, float tri, bool back)
 }
 
 // The light a surface point sends toward v, but its emission: the punctual lights' direct light
-// through the shadow maps, and the baked light of the emitters and the environment (baked:
-// irradiance / pi) through its diffuse albedo. (Shading at a hit, screen or BVH alike.)
+// through the shadow maps, and either what its pixel gathered of the rest (rb_hybrid_feedback,
+// when `fed`: `baked` is that light) or the baked light of the emitters and the environment
+// (irradiance / pi) through its diffuse albedo. (Shading at a hit, screen or BVH alike.)
 vec3 rb_hybrid_shade(vec3 p, vec3 n, vec3 ng, vec3 v, vec3 c_diff, vec3 f0, float f90,
-                     float roughness, vec3 baked)
+                     float roughness, vec3 baked, bool fed)
 {
-    return rb_punctual_light(vec3(0.0), p, n, ng, v, c_diff, f0, f90, roughness) + c_diff * baked;
+    return rb_punctual_light(vec3(0.0), p, n, ng, v, c_diff, f0, f90, roughness) +
+           (fed ? baked : c_diff * baked);
 }
 
 // Where the pixel's surface was in the previous frame (its motion vector), or (-1, -1) when it
@@ -305,6 +486,48 @@ ivec2 rb_hybrid_reproject(ivec2 px, float depth, vec3 n)
         dot(geo.xyz, n) < pc.params.w)
         return ivec2(-1);
     return q;
+}
+
+// Every bounce (DESIGN.md "hybrid", bvh trace): the light a hit at world point p (shading
+// normal n, on the side the ray sees; diffuse albedo c_diff, F0 f0) reflects, after any number
+// of bounces, as the pixel that saw p in the previous frame gathered it (seed 003's screen hits
+// reading the lit result): that pixel's diffuse and specular light, direct and indirect, each
+// over its samples, in this frame's younger accumulator, textured by the hit's own maps (the
+// accumulators are untextured). It is the light the pixel sends toward the camera, taken as what
+// the hit sends along the ray. Each frame's hits thus reflect one bounce more than the last
+// frame's. False where the previous frame did not see p (off screen, or another surface there:
+// the depth and normal tests), where the pixel has no diffuse samples yet, where that accumulator
+// starts again this frame (so that what an accumulator holds depends on the frames since its
+// start alone: the history contract of lib/integrators/hybrid.c), and with
+// integrator.hybrid.feedback off.
+bool rb_hybrid_feedback(vec3 p, vec3 n, vec3 c_diff, vec3 f0, out vec3 light)
+{
+    light = vec3(0.0);
+    uint set = pc.history.w;
+    if ((pc.history.z & 2u) == 0u || (set == 0u ? pc.history.x : pc.history.y) != 0u)
+        return false;
+    vec4 c = g.prev_view_proj * vec4(p, 1.0);
+    if (!(c.w > 0.0))
+        return false;
+    ivec2 q = ivec2(floor((c.xy / c.w * 0.5 + 0.5) * vec2(g.size.xy)));
+    if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(g.size.xy))))
+        return false;
+    vec4 geo = imageLoad(acc_prev, ivec3(q, RB_HYBRID_ACC_GEOMETRY));
+    if (!(geo.w > 0.0) || abs(geo.w - c.w) > pc.params.z * 2.0 * c.w ||
+        dot(geo.xyz, n) < pc.params.w)
+        return false;
+    uint base = 4u * set;
+    vec4 dd = imageLoad(acc_prev, ivec3(q, base + RB_HYBRID_ACC_DIFFUSE_DIRECT));
+    if (!(dd.w > 0.0) && max(c_diff.r, max(c_diff.g, c_diff.b)) > 0.0)
+        return false;
+    vec4 di = imageLoad(acc_prev, ivec3(q, base + RB_HYBRID_ACC_DIFFUSE_INDIRECT));
+    vec4 sd = imageLoad(acc_prev, ivec3(q, base + RB_HYBRID_ACC_SPECULAR_DIRECT));
+    vec4 si = imageLoad(acc_prev, ivec3(q, base + RB_HYBRID_ACC_SPECULAR_INDIRECT));
+    if (dd.w > 0.0)
+        light += c_diff * (dd.rgb + di.rgb) / dd.w;
+    if (sd.w > 0.0)
+        light += rb_spec_map(f0) * (sd.rgb + si.rgb) / sd.w;
+    return true;
 }
 
 // The tile mask at a pixel, smoothed by a cubic B-spline across tiles (seed 003: "bicubic tile

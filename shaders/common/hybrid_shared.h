@@ -24,10 +24,11 @@
 
 /* One ray slot, 32 bytes (at 1920x1080 a ray a lobe's fit lavapipe's 128 MiB storage range).
  * While the ray waits for the BVH: a.xyz its direction, b.rgb the estimator's weight (BRDF x
- * cosine / pdf, untextured as the output pass expects); its origin is its pixel's, recomputed
+ * cosine / pdf, untextured as the output pass expects), b.w the lobe's pdf of the direction (for
+ * the MIS weight of an emitter it hits); its origin is its pixel's, recomputed
  * (rb_hybrid_origin). Once shaded, what it brings the pixel, weighted, split as the layers are:
- * a.rgb the emission or environment it found (direct light of the camera vertex), b.rgb the
- * light its hit reflects (one indirect bounce). */
+ * a.rgb the emission or environment it found, MIS-weighted, plus the light pass's light sample
+ * (direct light of the camera vertex), b.rgb the light its hit reflects (the indirect light). */
 struct rb_gpu_hybrid_slot {
     RB_VEC4(a); /* w: state, float bits of RB_HYBRID_* */
     RB_VEC4(b);
@@ -51,6 +52,12 @@ struct rb_gpu_hybrid_counters {
     RB_UVEC4(check);    /* check_screen: screen hits traced again, those the BVH agrees with */
     RB_UVEC4(dispatch); /* x, y, z workgroups of the BVH pass */
 };
+
+/* The emitter table of next-event estimation (seed 003 has none; DESIGN.md "hybrid", rays):
+ * the pc.bake.w emissive triangles' global indices in `indices` from uint pc.scene.z (written
+ * once), and their running sums of emitted power (area x luminance of the emissive factor, as
+ * the reference and bdpt weigh them), as float bits in `blocks` after the queue's blocks, the
+ * total last: hybrid_emitters.comp writes them each frame from the frame's vertices. */
 
 /* Workgroup size of the queue's passes (a block of slots each) and of the BVH pass. */
 #define RB_HYBRID_QUEUE_GROUP 256u
@@ -77,16 +84,17 @@ struct rb_gpu_hybrid_counters {
 /* Push constants of every hybrid pass: the one layout keeps the record code simple. */
 struct rb_gpu_hybrid_push {
     RB_UVEC4(frame);   /* frame index, rays a lobe, lobe of this dispatch, slots per lobe */
-    RB_UVEC4(history); /* reset A, reset B (0/1), output set (0: A, 1: B), younger set */
+    RB_UVEC4(history); /* reset A, reset B (0/1), output set (0: A, 1: B) | 2 with feedback
+                        * (rb_hybrid_feedback), younger set */
     RB_UVEC4(sizes);   /* spp aimed for, screen steps, queue capacity, hiz levels */
     RB_UVEC4(level);   /* hiz: level written, its width, height, offset; queue: phase */
     RB_UVEC4(more);    /* hiz: offset of the level read, its width, height; filter radius */
     RB_VEC4(params);   /* noise target, thickness, filter depth stop, filter normal stop */
-    RB_VEC4(scene);    /* scene diagonal, ray offset (fraction of depth), unused, check_screen
-                        * (0/1) */
+    RB_VEC4(scene);    /* scene diagonal, ray offset (fraction of depth), first uint of the
+                        * emitter list in `indices` (uint bits), check_screen (0/1) */
     RB_UVEC4(bake);    /* baked light (0/1), screen hits find their triangle by the G-buffer's
                         * index (1) or by a short BVH ray (0), first uint of the per-triangle
-                        * bake words, unused */
+                        * bake words, emissive triangles (the emitter table's length) */
 };
 
 #endif

@@ -46,6 +46,18 @@ for run in "1 ray:64" "4 rays:256"; do
             "${run%:*} a lobe: the error after $f"
     done
 done
+if [ "$names" = demo ]; then
+    stdout_has "^hybrid still Cornell box: skipped" "a missing Cornell box skips its error section"
+else
+    stdout_has "^hybrid error on the still Cornell box at 32x18 (defaults) against the reference (default path space)" \
+        "the Cornell box's error section says its truth"
+    for f in " 1 frame " " 8 frames"; do
+        stdout_has "^  after  *$f: relMSE beauty $x, direct $x, indirect $x; rays requested $x$" \
+            "the Cornell box: the error after $f"
+    done
+    stdout_has "^hybrid rays requested a frame over the still Cornell box (frame:rays): 0:$x" \
+        "the Cornell box: rays a frame over the shot"
+fi
 stdout_has "^hybrid moving demo (jobs/demo-hybrid.yaml) at 32x18, medians over frames 1-2: frame wall $x ms, GPU passes $x ms, wall / GPU $x$" \
     "the moving demo's wall over GPU time"
 stdout_has "^hybrid bench took $x min; load average" "the bench's own time and the machine's load"

@@ -121,12 +121,12 @@ if have_scene cornell-box/CornellBox.glb; then
     expect_exit 0 "the Cornell box's reference with one bounce, 1024 spp"
     ref="$T/ref/frame.0063.exr"
     # Enough samples that what is left is bias: 16 rays a lobe and frame, no noise target, a
-    # pixel aiming for 1024 samples, 256 light samples a baked point.
+    # pixel aiming for 1024 samples, 256 light samples a baked point; one bounce (no feedback).
     for bake in 256 0; do
         rb render "$box" --integrator hybrid --size 64x64 --frames 0-63 --out "$T/c$bake" -q \
             --set integrator.hybrid.history=64 --set integrator.hybrid.rays=16 \
             --set integrator.hybrid.spp=1024 --set integrator.hybrid.noise=0 \
-            --set integrator.hybrid.bake_samples=$bake
+            --set integrator.hybrid.bake_samples=$bake --set integrator.hybrid.feedback=false
         expect_exit 0 "64 frames of the Cornell box, bake_samples $bake"
     done
     baked=$(relmse "$T/c256/frame.0063.exr" "$ref" indirect)

@@ -112,28 +112,28 @@ check "W = 8: frame 4 starts accumulator B and asks again where frame 3 was done
 # ---- a target some tiles meet: done tiles do not grow -----------------------------------------
 
 # shellcheck disable=SC2086
-rb render "$T/still.yaml" $small --frames 0-15 --set integrator.hybrid.noise=1 --out "$T/mid"
-expect_exit 0 "sixteen frames with a noise target of 1"
+rb render "$T/still.yaml" $small --frames 0-15 --set integrator.hybrid.noise=0.1 --out "$T/mid"
+expect_exit 0 "sixteen frames with a noise target of 0.1"
 # shellcheck disable=SC2046 # the two lobes' means, as $1 and $2
 set -- $(chstat "$(frame "$T/mid" 8)" "$M" Avg)
-echo "# noise 1, frame 8: done fraction diffuse $1, specular $2"
-check "noise 1, frame 8: some pixels are done and some are not, in each lobe ($1, $2)" \
+echo "# noise 0.1, frame 8: done fraction diffuse $1, specular $2"
+check "noise 0.1, frame 8: some pixels are done and some are not, in each lobe ($1, $2)" \
     sh -c "awk -v d=$1 -v s=$2 'BEGIN { exit !(d > 0 && d < 1 && s > 0 && s < 1) }'"
 bad=""
 for f in 3 4 5 6 7 8 9 10 11 12 13 14; do
     gain=$(gain_where_done "$T/mid" $f)
     test "$gain" = "0.000000 0.000000" || bad="$bad $f:($gain)"
 done
-check "noise 1: a pixel whose lobe is done in frame N gains no sample in N+1 (N = 3..14)$bad" \
+check "noise 0.1: a pixel whose lobe is done in frame N gains no sample in N+1 (N = 3..14)$bad" \
     test -z "$bad"
 g=$(oiiotool "$(frame "$T/mid" 9)" --ch "$S" "$(frame "$T/mid" 8)" --ch "$S" --sub --printstats \
     2>/dev/null | sed -n 's/^ *Stats Max: \(.*\) (float)$/\1/p')
-check "noise 1: the pixels that are not done still gain samples from frame 8 to 9 ($g)" \
+check "noise 0.1: the pixels that are not done still gain samples from frame 8 to 9 ($g)" \
     test "$g" = "1.000000 1.000000"
 rb compare "$(frame "$T/mid" 8)" "$(frame "$T/n0" 8)" --layer samples --json
 check "compare reads the samples layer by its lobes' channels" \
     grep -q '"channels": \["samples.diffuse", "samples.specular"\]' "$T/stdout"
-check "noise 1 has fewer samples than no target at frame 8 (compare's rmse is not 0)" \
+check "noise 0.1 has fewer samples than no target at frame 8 (compare's rmse is not 0)" \
     sh -c "! grep -q '\"rmse\": 0,' '$T/stdout'"
 
 # ---- determinism: a chunk that pre-rolls W frames has the whole run's counts and masks -------
