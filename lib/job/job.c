@@ -220,8 +220,8 @@ static const struct key keys[] = {
       "bdpt: cosine between normals below which the filter stops and a cache sample is not the "
       "pixel's surface"),
     K("integrator.bdpt.clamp", KT_FLOAT, JOB(integrator.bdpt.clamp), 0, NOHI, "100", 0,
-      "bdpt: with strategies vpl, bound on the geometry term of the VPLs' connections, in units "
-      "of one over the scene diagonal squared; 0: no clamp"),
+      "bdpt: bound on the geometry term of the VPLs' connections (with mis, on it times the VPL's "
+      "weight), in units of one over the scene diagonal squared; 0: no clamp"),
     K("integrator.bdpt.vpl_bias", KT_FLOAT, JOB(integrator.bdpt.vpl_bias), 0, NOHI, "0.01", 0,
       "bdpt: VPL shadow-map depth bias as a fraction of the distance to the VPL"),
     K("integrator.bdpt.min_roughness", KT_FLOAT, JOB(integrator.bdpt.min_roughness), 0, 1, "0.5", 0,
