@@ -511,24 +511,9 @@ static enum rb_status emitters_init(struct rb_integrator *it, struct hybrid *d, 
     return RB_OK;
 }
 
-/* A texel's luminance as the reference's importance table reads it: u repeats, v clamps. */
-static float env_luminance(const struct rb_integrator *it, int64_t x, int64_t y)
-{
-    int64_t w = it->env_width_px, h = it->env_height_px;
-    x %= w;
-    if (x < 0)
-        x += w;
-    y = y < 0 ? 0 : (y >= h ? h - 1 : y);
-    const float *t = it->env_rgba + ((size_t)y * (size_t)w + (size_t)x) * 4;
-    float lum =
-        0.2126f * fmaxf(t[0], 0.0f) + 0.7152f * fmaxf(t[1], 0.0f) + 0.0722f * fmaxf(t[2], 0.0f);
-    return lum == lum && lum < INFINITY ? lum : 0.0f;
-}
-
 /* The environment's light samples: whether it is lit, and with a map the importance table of
- * its texels, computed as the reference's (lib/reference/lights.c, rb_ref_env_init) so that both
- * sample the same directions with the same pdf: the marginal CDF over rows (h + 1 floats), each
- * row's CDF (w + 1 a row), each texel's probability (w h). */
+ * its texels, the reference's own (rb_reference_env_table), so that both sample the same
+ * directions with the same pdf. */
 static enum rb_status env_init(struct rb_integrator *it, struct hybrid *d, struct rb_err *err)
 {
     const struct rb_job *job = it->job;
@@ -538,48 +523,11 @@ static enum rb_status env_init(struct rb_integrator *it, struct hybrid *d, struc
     d->h.has_env_light = lit;
     if (!lit || !it->env_rgba)
         return RB_OK;
-    uint32_t w = it->env_width_px, h = it->env_height_px;
-    d->env_floats = (size_t)(h + 1) + (size_t)h * (w + 1) + (size_t)w * h;
-    float *t = d->env_table = malloc(d->env_floats * sizeof(float));
-    double *row_sum = malloc(((size_t)h + 1) * sizeof(double));
-    if (!t || !row_sum) {
-        free(row_sum);
+    d->env_floats = rb_reference_env_table_floats(it->env_width_px, it->env_height_px);
+    if (!(d->env_table = malloc(d->env_floats * sizeof(float))))
         return rb_errf(err, RB_E_NOMEM, "out of memory for the environment's importance table");
-    }
-    float *marginal = t, *conditional = t + h + 1, *texel_pdf = conditional + (size_t)h * (w + 1);
-    double total = 0.0;
-    for (uint32_t y = 0; y < h; y++) {
-        float st = sinf(RB_PI * ((float)y + 0.5f) / (float)h);
-        double sum = 0.0;
-        float *cdf = conditional + (size_t)y * (w + 1);
-        cdf[0] = 0.0f;
-        for (uint32_t x = 0; x < w; x++) {
-            float m = 0.0f;
-            for (int dy = -1; dy <= 1; dy++)
-                for (int dx = -1; dx <= 1; dx++)
-                    m = fmaxf(m, env_luminance(it, (int64_t)x + dx, (int64_t)y + dy));
-            float wgt = m * st;
-            texel_pdf[(size_t)y * w + x] = wgt;
-            sum += wgt;
-            cdf[x + 1] = (float)sum;
-        }
-        for (uint32_t x = 1; x <= w; x++)
-            cdf[x] = sum > 0.0 ? (float)(cdf[x] / sum) : (float)x / (float)w;
-        cdf[w] = 1.0f;
-        row_sum[y] = sum;
-        total += sum;
-    }
-    double acc = 0.0;
-    marginal[0] = 0.0f;
-    for (uint32_t y = 0; y < h; y++) {
-        acc += row_sum[y];
-        marginal[y + 1] = total > 0.0 ? (float)(acc / total) : 0.0f;
-    }
-    marginal[h] = 1.0f;
-    for (size_t i = 0; i < (size_t)w * h; i++)
-        texel_pdf[i] = total > 0.0 ? (float)(texel_pdf[i] / total) : 0.0f;
-    free(row_sum);
-    return RB_OK;
+    return rb_reference_env_table(it->env_rgba, it->env_width_px, it->env_height_px, d->env_table,
+                                  err);
 }
 
 static enum rb_status create(struct rb_integrator *it, void **state, struct rb_err *err)

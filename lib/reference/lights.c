@@ -104,6 +104,50 @@ static float texel_luminance(const struct rb_ref_env *env, int64_t x, int64_t y)
     return lum == lum && lum < INFINITY ? lum : 0.0f;
 }
 
+/* The importance table of env's map into marginal (h + 1), conditional (h rows of w + 1) and
+ * texel_pdf (w h); returns the sum of the texels' weights (0: no light). row_sum: h doubles of
+ * scratch. */
+static double env_table(const struct rb_ref_env *env, float *marginal, float *conditional,
+                        float *texel_pdf, double *row_sum)
+{
+    uint32_t w = env->width_px, h = env->height_px;
+    /* A texel's weight is the largest luminance of its 3x3 neighbourhood, so that every
+     * direction the bilinear lookup gives light to has a non-zero pdf, times sin(theta) for
+     * the equirectangular area. */
+    double total = 0.0;
+    for (uint32_t y = 0; y < h; y++) {
+        float st = sinf(RB_PI * ((float)y + 0.5f) / (float)h);
+        double sum = 0.0;
+        float *cdf = conditional + (size_t)y * (w + 1);
+        cdf[0] = 0.0f;
+        for (uint32_t x = 0; x < w; x++) {
+            float m = 0.0f;
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++)
+                    m = rb_ref_maxf(m, texel_luminance(env, (int64_t)x + dx, (int64_t)y + dy));
+            float wgt = m * st;
+            texel_pdf[(size_t)y * w + x] = wgt;
+            sum += wgt;
+            cdf[x + 1] = (float)sum;
+        }
+        for (uint32_t x = 1; x <= w; x++)
+            cdf[x] = sum > 0.0 ? (float)(cdf[x] / sum) : (float)x / (float)w;
+        cdf[w] = 1.0f;
+        row_sum[y] = sum;
+        total += sum;
+    }
+    double acc = 0.0;
+    marginal[0] = 0.0f;
+    for (uint32_t y = 0; y < h; y++) {
+        acc += row_sum[y];
+        marginal[y + 1] = total > 0.0 ? (float)(acc / total) : 0.0f;
+    }
+    marginal[h] = 1.0f;
+    for (size_t i = 0; i < (size_t)w * h; i++)
+        texel_pdf[i] = total > 0.0 ? (float)(texel_pdf[i] / total) : 0.0f;
+    return total;
+}
+
 enum rb_status rb_ref_env_init(struct rb_ref_env *env, struct rb_err *err)
 {
     env->is_black = false;
@@ -122,42 +166,30 @@ enum rb_status rb_ref_env_init(struct rb_ref_env *env, struct rb_err *err)
         free(row_sum);
         return rb_errf(err, RB_E_NOMEM, "out of memory for the environment's importance table");
     }
-    /* A texel's weight is the largest luminance of its 3x3 neighbourhood, so that every
-     * direction the bilinear lookup gives light to has a non-zero pdf, times sin(theta) for
-     * the equirectangular area. */
-    double total = 0.0;
-    for (uint32_t y = 0; y < h; y++) {
-        float st = sinf(RB_PI * ((float)y + 0.5f) / (float)h);
-        double sum = 0.0;
-        float *cdf = env->conditional + (size_t)y * (w + 1);
-        cdf[0] = 0.0f;
-        for (uint32_t x = 0; x < w; x++) {
-            float m = 0.0f;
-            for (int dy = -1; dy <= 1; dy++)
-                for (int dx = -1; dx <= 1; dx++)
-                    m = rb_ref_maxf(m, texel_luminance(env, (int64_t)x + dx, (int64_t)y + dy));
-            float wgt = m * st;
-            env->texel_pdf[(size_t)y * w + x] = wgt;
-            sum += wgt;
-            cdf[x + 1] = (float)sum;
-        }
-        for (uint32_t x = 1; x <= w; x++)
-            cdf[x] = sum > 0.0 ? (float)(cdf[x] / sum) : (float)x / (float)w;
-        cdf[w] = 1.0f;
-        row_sum[y] = sum;
-        total += sum;
-    }
-    double acc = 0.0;
-    env->marginal[0] = 0.0f;
-    for (uint32_t y = 0; y < h; y++) {
-        acc += row_sum[y];
-        env->marginal[y + 1] = total > 0.0 ? (float)(acc / total) : 0.0f;
-    }
-    env->marginal[h] = 1.0f;
-    for (size_t i = 0; i < (size_t)w * h; i++)
-        env->texel_pdf[i] = total > 0.0 ? (float)(env->texel_pdf[i] / total) : 0.0f;
+    double total = env_table(env, env->marginal, env->conditional, env->texel_pdf, row_sum);
     free(row_sum);
     env->is_black = !(total > 0.0) || !(env->intensity > 0.0f);
+    return RB_OK;
+}
+
+size_t rb_reference_env_table_floats(uint32_t width_px, uint32_t height_px)
+{
+    return (size_t)(height_px + 1) + (size_t)height_px * (width_px + 1) +
+           (size_t)width_px * height_px;
+}
+
+enum rb_status rb_reference_env_table(const float *rgba, uint32_t width_px, uint32_t height_px,
+                                      float *out, struct rb_err *err)
+{
+    if (width_px == 0 || height_px == 0)
+        return rb_errf(err, RB_E_INVALID, "environment map of %ux%u pixels", width_px, height_px);
+    double *row_sum = malloc(height_px * sizeof(double));
+    if (!row_sum)
+        return rb_errf(err, RB_E_NOMEM, "out of memory for the environment's importance table");
+    struct rb_ref_env env = {.rgba = rgba, .width_px = width_px, .height_px = height_px};
+    float *conditional = out + height_px + 1;
+    env_table(&env, out, conditional, conditional + (size_t)height_px * (width_px + 1), row_sum);
+    free(row_sum);
     return RB_OK;
 }
 

@@ -54,6 +54,14 @@ enum rb_status rb_reference_render(struct rb_reference *ref, int frame, struct r
 
 void rb_reference_destroy(struct rb_reference *ref);
 
+/* The importance table by which the reference samples an environment map (RGBA floats, width x
+ * height, equirectangular), for a device that samples it the same way (the hybrid integrator):
+ * into out, height + 1 floats of the CDF over rows, then each row's CDF (width + 1 floats a row),
+ * then each texel's probability (width x height); rb_reference_env_table_floats floats in all. */
+size_t rb_reference_env_table_floats(uint32_t width_px, uint32_t height_px);
+enum rb_status rb_reference_env_table(const float *rgba, uint32_t width_px, uint32_t height_px,
+                                      float *out, struct rb_err *err);
+
 /* A point of the bake: on the triangle of world vertices vertex[0..2] (in the order of the
  * scene's instances, as lib/integrators/frame.c lays them out; any three, so a simplified mesh's
  * triangles too) at barycentrics u, v of the second and third, on the side their winding faces
