@@ -115,6 +115,24 @@ static void ctx_init(struct rb_ref_ray_ctx *ctx, const struct rb_ref_world *w, b
     ctx->layer_count = ctx->layer_cap = 0;
 }
 
+/* A ray from org along dir over [tnear, tfar], no hit yet. */
+static void ray_hit_init(struct RTCRayHit *rh, const float org[3], const float dir[3], float tnear,
+                         float tfar)
+{
+    memset(rh, 0, sizeof(*rh));
+    rh->ray.org_x = org[0];
+    rh->ray.org_y = org[1];
+    rh->ray.org_z = org[2];
+    rh->ray.dir_x = dir[0];
+    rh->ray.dir_y = dir[1];
+    rh->ray.dir_z = dir[2];
+    rh->ray.tnear = tnear;
+    rh->ray.tfar = tfar;
+    rh->ray.mask = UINT32_MAX;
+    rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
 void rb_ref_intersect(const struct rb_ref_world *w, bool is_camera, const float org[3],
                       const float dir[3], float tnear, float tfar, struct rb_ref_hit *hit)
 {
@@ -124,18 +142,7 @@ void rb_ref_intersect(const struct rb_ref_world *w, bool is_camera, const float 
     struct rb_ref_ray_ctx ctx;
     ctx_init(&ctx, w, is_camera);
     struct RTCRayHit rh;
-    memset(&rh, 0, sizeof(rh));
-    rh.ray.org_x = org[0];
-    rh.ray.org_y = org[1];
-    rh.ray.org_z = org[2];
-    rh.ray.dir_x = dir[0];
-    rh.ray.dir_y = dir[1];
-    rh.ray.dir_z = dir[2];
-    rh.ray.tnear = tnear;
-    rh.ray.tfar = tfar;
-    rh.ray.mask = UINT32_MAX;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    ray_hit_init(&rh, org, dir, tnear, tfar);
     rtcIntersect1(w->rtc, &ctx.rtc, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
         return;
@@ -163,18 +170,7 @@ uint32_t rb_ref_blend_layers(const struct rb_ref_world *w, const float org[3], c
     ctx.layers = layers;
     ctx.layer_cap = RB_REF_MAX_LAYERS;
     struct RTCRayHit rh;
-    memset(&rh, 0, sizeof(rh));
-    rh.ray.org_x = org[0];
-    rh.ray.org_y = org[1];
-    rh.ray.org_z = org[2];
-    rh.ray.dir_x = dir[0];
-    rh.ray.dir_y = dir[1];
-    rh.ray.dir_z = dir[2];
-    rh.ray.tnear = tnear;
-    rh.ray.tfar = tfar;
-    rh.ray.mask = UINT32_MAX;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    ray_hit_init(&rh, org, dir, tnear, tfar);
     rtcIntersect1(w->rtc, &ctx.rtc, &rh); /* the filter rejects every hit: all are offered */
     qsort(layers, ctx.layer_count, sizeof(*layers), nearer_first);
     return ctx.layer_count;
