@@ -267,7 +267,7 @@ void emitters(ivec2 sp)
         float rough = nr.w, f90 = fr.a;
         uint k_v = uint(pc.frame.y), k_b = uint(pc.frame.z), count = uint(n * n);
         uint s = uint((sp.y / sub.y) * n + sp.x / sub.x);
-        float n_b = k_b > s ? float((k_b - s + count - 1u) / count) : 0.0, n_a = pc.frame.y;
+        float n_b = float(rb_bdpt_share(k_b, s, count)), n_a = pc.frame.y;
         for (uint j = 0u; j < k_v; j++) {
             if (!(vpls[j].position.w > 0.0) || uint(vpls[j].from.w) != RB_BDPT_VPL_EMITTER)
                 continue;

@@ -154,7 +154,7 @@ static uint32_t sample_rank(uint32_t i, uint32_t count, uint32_t m)
 {
     uint32_t s = i % m, before = 0;
     for (uint32_t t = 0; t < s; t++)
-        before += count > t ? (count - t + m - 1) / m : 0;
+        before += rb_bdpt_share(count, t, m);
     return before + i / m;
 }
 

@@ -407,13 +407,6 @@ void rb_pass_bdpt_mark_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     vkCmdDispatch(cmd, groups(b->sub_width_px, 8), groups(b->sub_height_px, 8), 1);
 }
 
-/* How many of the iterations k < limit land on sub-image s of count: those with k mod count
- * == s. */
-static uint32_t share(uint32_t limit, uint32_t s, uint32_t count)
-{
-    return limit > s ? (limit - s + count - 1) / count : 0;
-}
-
 static void bind_connect(struct rb_pass_bdpt *p, VkCommandBuffer cmd, const struct rb_frame *frame,
                          const struct rb_bdpt_frame *b)
 {
@@ -464,8 +457,9 @@ void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
         .index = {k, k < b->vpl_count, k < b->bundle_count, (uint32_t)b->strategies},
         .region = {(s % n) * b->sub_width_px, (s / n) * b->sub_height_px, b->sub_width_px,
                    b->sub_height_px},
-        .counts = {(float)share(b->vpl_count, s, count), (float)share(b->bundle_count, s, count),
-                   (float)share(pairs, s, count), b->clamp_g},
+        .counts = {(float)rb_bdpt_share(b->vpl_count, s, count),
+                   (float)rb_bdpt_share(b->bundle_count, s, count),
+                   (float)rb_bdpt_share(pairs, s, count), b->clamp_g},
         .params = {b->vpl_bias, (float)b->vpl_size_px, (float)b->bundle_size_px,
                    (float)b->bundle.capacity_nodes},
         .bounce = {b->has_bounce && k < b->vpl_count ? b->vpl_count + k : RB_NONE,

@@ -166,9 +166,19 @@ struct rb_gpu_bdpt_image_push {
  * shader uses them and tests/unit/test_bdpt.c holds them to their properties. */
 #ifdef VULKAN
 #define RB_BDPT_FN
+#define RB_BDPT_UINT uint
 #else
 #define RB_BDPT_FN static inline
+#define RB_BDPT_UINT uint32_t
 #endif
+
+/* How many of the iterations k < limit land on sub-image s of count (n x n): those with
+ * k mod count == s. The host's counts of a connect iteration and the emitters' dispatch's
+ * bundles of a pixel's sub-image. */
+RB_BDPT_FN RB_BDPT_UINT rb_bdpt_share(RB_BDPT_UINT limit, RB_BDPT_UINT s, RB_BDPT_UINT count)
+{
+    return limit > s ? (limit - s + count - 1u) / count : 0u;
+}
 
 /* The area density at z of a bundle ray from x: a direction uniform over x's hemisphere
  * (1 / 2 pi) seen from z at cos_z, dist2 away. */
