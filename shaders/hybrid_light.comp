@@ -6,7 +6,11 @@
 // cosine-weighted without a map, as the reference's). Each has its visibility by a shadow ray
 // through the BVH, and brings the lobe's BRDF (untextured, as the ray's weight is) x cosine x
 // its light over its pdf, weighted against the BRDF rays that find the same light by the power
-// heuristic (the reference's); added to what the ray found directly. Their random numbers are
+// heuristic (the reference's); added to what the ray found directly. Where the BVH's budget left
+// surfaces out, the shadow ray also marches the screen (the BRDF rays' march), and a surface it
+// meets there that the BVH does not hold blocks the sample too (a union with the BVH's answer,
+// which alone decides for its own triangles, exactly, so that the march's thickness guess never
+// shadows what it holds; an object held by its coarser version is both). Their random numbers are
 // the pixel's own R3 sequence (rb_hybrid_u3) and a rotation of its R2 sequence apart from the
 // rays'.
 #version 460
@@ -15,6 +19,25 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "hybrid.glsl"
+#include "hybrid_screen.glsl"
+
+// Whether the screen shows a surface the BVH does not hold (a triangle without a bake word: left
+// out by the budget, or held by its coarser version) on the way from o along l, nearer than
+// dist. Only where the frame's BVH leaves objects out (pc.more.x), and where screen hits know
+// their triangle (the G-buffer's index and the bake words).
+bool screen_occluded(vec3 o, vec3 l, float dist)
+{
+    if (pc.more.x == 0u || pc.sizes.y == 0u || pc.bake.x == 0u || pc.bake.y == 0u)
+        return false;
+    ivec2 hit = screen_trace(o, l, pc.params.y, pc.sizes.y);
+    if (hit.x < 0)
+        return false;
+    vec3 p = imageLoad(gb_position, hit).xyz;
+    if (!(dot(p - o, l) < dist))
+        return false;
+    uint t = uint(imageLoad(gb_albedo, hit).w);
+    return bake_words[pc.bake.z + t] == 0u;
+}
 
 // The first emitter whose running sum is over x (one of positive power).
 uint pick_emitter(float x)
@@ -76,7 +99,8 @@ void light_sample(bvec2 lit, vec3 o, vec3 n, vec3 ng, vec3 v, vec4 spec, float f
     if (!(max(le.r, max(le.g, le.b)) > 0.0))
         return;
     // The shadow ray stops short of the emitter, so that it cannot find the emitter itself.
-    if (rb_bvh_occluded(o, l, 0.0, dist * (1.0 - 1e-3)))
+    if (rb_bvh_occluded(o, l, 0.0, dist * (1.0 - 1e-3)) ||
+        screen_occluded(o, l, dist * (1.0 - 1e-3)))
         return;
     add_lobes(lit, n, v, spec, f90, l, pdf, le, c);
 }
@@ -90,7 +114,8 @@ void env_sample(bvec2 lit, vec3 o, vec3 n, vec3 ng, vec3 v, vec4 spec, float f90
     if (!(pdf > 0.0) || !(pdf < 1e30) || dot(ng, l) <= 0.0 || dot(n, l) <= 0.0)
         return;
     vec3 le = rb_hybrid_env(l);
-    if (!(max(le.r, max(le.g, le.b)) > 0.0) || rb_bvh_occluded(o, l, 0.0, 1e30))
+    if (!(max(le.r, max(le.g, le.b)) > 0.0) || rb_bvh_occluded(o, l, 0.0, 1e30) ||
+        screen_occluded(o, l, 1e30))
         return;
     add_lobes(lit, n, v, spec, f90, l, pdf, le, c);
 }
@@ -118,6 +143,8 @@ void main()
     vec4 spec = imageLoad(gb_specular, px);
     float f90 = imageLoad(gb_emission, px).w;
     vec3 o = rb_hybrid_origin(px);
+    if (pc.more.x != 0u)
+        hiz_levels();
     uint rays = pc.frame.y;
     for (uint r = 0u; r < rays; r++) {
         uint slot_d = rb_hybrid_slot(RB_HYBRID_DIFFUSE, r, px);

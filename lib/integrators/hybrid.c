@@ -855,6 +855,9 @@ static void upload(struct hybrid *d, int64_t epoch, double wait_ms)
     struct rb_bvh *bvh = &w->bvh;
     if (d->ref)
         upload_bake(d, bvh, epoch);
+    /* Occluders the budget left out of the BVH are found on the screen (hybrid_light.comp); an
+     * object held by its coarser version shadows by that. */
+    d->h.screen_shadows = d->settings->screen_shadows && bvh->triangles_left_out > 0;
     memcpy(d->h.bvh_nodes.mapped, bvh->nodes, bvh->node_count * sizeof(*bvh->nodes));
     memcpy(d->h.bvh_tris.mapped, bvh->triangles, bvh->triangle_count * sizeof(*bvh->triangles));
     if (bvh->triangles_left_out || bvh->objects_simplified)

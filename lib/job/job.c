@@ -285,6 +285,10 @@ static const struct key keys[] = {
       "0.05", 0, "hybrid: relative depth difference at which the filter stops"),
     K("integrator.hybrid.filter_normal", KT_FLOAT, JOB(integrator.hybrid.filter_normal), -1, 1,
       "0.9", 0, "hybrid: cosine between normals below which the filter stops"),
+    K("integrator.hybrid.screen_shadows", KT_BOOL, JOB(integrator.hybrid.screen_shadows), NOLO,
+      NOHI, "true", 0,
+      "hybrid: light samples' shadow rays also march the screen, for the surfaces the BVH's "
+      "budget leaves out"),
     K("integrator.reference.spp", KT_UINT, JOB(integrator.reference.spp), 1, 1048576, "64", 0,
       "reference: samples per pixel"),
     K("integrator.reference.max_bounces", KT_UINT, JOB(integrator.reference.max_bounces), 0, 64,
@@ -1454,6 +1458,7 @@ void rb_job_rehash(struct rb_job *job)
         h = h_u32(h, y->bvh_triangles);
         h = h_u32(h, y->bvh_interval);
         h = h_u32(h, (uint32_t)y->bvh_select);
+        h = h_u32(h, y->screen_shadows);
         h = h_u32(h, y->bvh_lod);
         h = h_u32(h, y->bake_texels);
         h = h_u32(h, y->bake_samples);

@@ -206,6 +206,8 @@ struct rb_job {
             float filter_normal;       /* cosine between normals below which it stops, 0.9 */
             /* the score the BVH's budget chooses objects by, default relevance */
             enum rb_bvh_select bvh_select;
+            /* light samples also find occluders the BVH leaves out by a screen march */
+            bool screen_shadows;
         } hybrid;
         struct {
             uint32_t spp;         /* samples per pixel, default 64 */

@@ -252,6 +252,7 @@ static void record_light(struct rb_pass_hybrid *p, VkCommandBuffer cmd,
 {
     if (!h->push.bake[3] && !h->has_env_light)
         return; /* nothing emits and the environment is black: no light sample */
+    h->push.more[0] = h->screen_shadows;
     bind(&p->light, cmd, frame, slot, h);
     vkCmdDispatch(cmd, groups(frame->width_px, 8), groups(frame->height_px, 8), 1);
 }

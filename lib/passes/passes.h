@@ -488,7 +488,9 @@ struct rb_hybrid_frame {
     struct rb_gpu_image stats;    /* samples (diffuse, specular), tile mask */
     struct rb_gpu_image light[RB_BDPT_LIGHT_COUNT]; /* what the output pass textures */
     uint32_t cur;                                   /* the accumulator written: frame mod 2 */
-    bool has_env_light; /* the environment is lit: light samples of it (hybrid_light.comp) */
+    bool has_env_light;  /* the environment is lit: light samples of it (hybrid_light.comp) */
+    bool screen_shadows; /* the light samples' shadow rays also march the screen: the BVH's
+                          * budget leaves surfaces out */
 };
 
 struct rb_pass_hybrid;

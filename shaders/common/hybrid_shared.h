@@ -88,7 +88,8 @@ struct rb_gpu_hybrid_push {
                         * (rb_hybrid_feedback), younger set */
     RB_UVEC4(sizes);   /* spp aimed for, screen steps, queue capacity, hiz levels */
     RB_UVEC4(level);   /* hiz: level written, its width, height, offset; queue: phase */
-    RB_UVEC4(more);    /* hiz: offset of the level read, its width, height; filter radius */
+    RB_UVEC4(more);    /* hiz: offset of the level read, its width, height; light_rays: x, the
+                        * shadow rays march the screen too (1); filter radius */
     RB_VEC4(params);   /* noise target, thickness, filter depth stop, filter normal stop */
     RB_VEC4(scene);    /* scene diagonal, ray offset (fraction of depth), first uint of the
                         * emitter list in `indices` (uint bits), check_screen (0/1) */

@@ -60,6 +60,20 @@ echo "# relMSE against the reference at frame 15: relevance $rel, area $area"
 check "relevance's error is smaller than the area score's ($rel < $area)" below "$rel" "$area"
 check "and by more than half ($rel < $area / 2)" below "$rel" "$(awk -v a="$area" 'BEGIN { print a / 2 }')"
 
+# The light samples' shadow rays march the screen for the surfaces the budget leaves out (the
+# area score leaves most spheres out): their shadows on the floor come back, and the direct
+# layer is nearer the reference than with the BVH's occluders alone.
+rb render "$T/crowd.yaml" --out "$T/area-bvh" -q --set integrator.hybrid.bvh_triangles=2800 \
+    --set integrator.hybrid.bvh_select=area --set integrator.hybrid.screen_shadows=false
+expect_exit 0 "the crowd, bvh_select area, screen_shadows false"
+d_screen=$("$RB" compare "$T/area/frame.0015.exr" "$T/ref/frame.0015.exr" --layer direct --json |
+    sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p' | head -n 1)
+d_bvh=$("$RB" compare "$T/area-bvh/frame.0015.exr" "$T/ref/frame.0015.exr" --layer direct --json |
+    sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p' | head -n 1)
+echo "# area score, direct layer against the reference: screen shadows $d_screen, BVH alone $d_bvh"
+check "screen shadows bring the direct layer nearer the reference ($d_screen < 0.8 x $d_bvh)" \
+    below "$d_screen" "$(awk -v a="$d_bvh" 'BEGIN { print 0.8 * a }')"
+
 # The demo (754 triangles) under a budget of 300, every screen hit traced again through the BVH
 # (check_screen): the BVH that relevance chooses finds the surface the screen saw more often.
 agreed() { sed -n 's/.*"agreed": \([0-9]*\).*/\1/p' "$1"; }
@@ -89,6 +103,10 @@ changes=$(sed -n 's/.*the BVH of frame \([0-9]*\): object 0 .*/\1/p' "$T/stderr"
 echo "# the choice of objects changed at frames: $changes"
 check "the choice changes as the camera moves (at frames $changes)" \
     test "$(echo "$changes" | wc -w)" -ge 2
+check "the budget leaves triangles out, so the light samples march the screen too" \
+    grep -q 'triangles left out by the budget' "$T/stderr"
+check "and the log counts them" sh -c \
+    "! grep -q ' 0 triangles left out by the budget' '$T/stderr'"
 rb render "$T/crowd-moving.yaml" --out "$T/mvc" --frames 8-11 -q "$@"
 expect_exit 0 "the moving crowd, the chunk 8-11"
 for f in 08 11; do
