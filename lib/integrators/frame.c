@@ -598,10 +598,17 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
     for (uint32_t i = 0; i < first->light_count; i++) {
         uint32_t need = shadow_layers_for(first->lights[i].type);
         if (frame->shadow_layer_count + need > RB_MAX_SHADOW_LAYERS) {
-            rb_log(RB_LOG_WARN,
-                   "light %u and later lights cast no shadows: more than %d "
-                   "shadow-map layers would be needed",
-                   i, RB_MAX_SHADOW_LAYERS);
+            if (i < own)
+                rb_log(RB_LOG_WARN,
+                       "light %u and later lights cast no shadows: more than %d "
+                       "shadow-map layers would be needed",
+                       i, RB_MAX_SHADOW_LAYERS);
+            else
+                rb_log(RB_LOG_WARN,
+                       "%u of the %u lights of the blended surfaces (emitter samples, then "
+                       "environment directions) light nothing: more than %d shadow-map layers "
+                       "would be needed",
+                       first->light_count - i, first->layer_light_count, RB_MAX_SHADOW_LAYERS);
             break;
         }
         frame->shadow_layer_count += need;
