@@ -1,6 +1,7 @@
 // transparency: a fragment of a blended material (glTF alphaMode BLEND), lit as direct.comp
 // lights a G-buffer pixel (emission, and the frame's punctual lights with their shadow maps:
-// with the direct integrator, the emitters' point samples among them), premultiplied by its
+// with the direct integrator, the emitters' point samples among them; with bdpt and hybrid,
+// those samples and the environment's directions as the layer lights), premultiplied by its
 // alpha (base colour factor x texture alpha). The pipeline blends it over what the fragments
 // drawn before it left: rgb' = rgb_src + (1 - a) rgb, a' = (1 - a) a, from (0, 0, 0, 1), so the
 // target ends as the light the blended layers add (rgb) and the fraction of the light behind
@@ -22,6 +23,9 @@ layout(std430, binding = RB_BIND_TRANSPARENCY_SHADOW_VIEWS) readonly buffer View
 layout(binding = RB_BIND_TRANSPARENCY_SHADOW_MAPS) uniform sampler2DArray shadow_maps;
 
 #include "shadow.glsl"
+// The frame's lights and the layer lights after them: with bdpt and hybrid, the emitters' point
+// samples and the environment's directions, which their own passes leave out.
+#define RB_PUNCTUAL_LIGHT_COUNT (g.size.z + uint(g.shadow.w))
 #include "punctual.glsl"
 
 layout(location = 0) in vec3 i_pos;

@@ -294,7 +294,7 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
         VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT;
     const VkImageUsageFlags storage = VK_IMAGE_USAGE_STORAGE_BIT;
     uint32_t rsm = it->job->integrator.bdpt.rsm_size_px;
-    uint32_t rsm_layers = frame->shadow_layer_count ? frame->shadow_layer_count : 1;
+    uint32_t rsm_layers = frame->own_shadow_layer_count ? frame->own_shadow_layer_count : 1;
     static const char *const rsm_names[RB_VIEW_RSM_TARGETS] = {
         "bdpt.rsm.position", "bdpt.rsm.normal", "bdpt.rsm.flux", "bdpt.rsm.material"};
     static const char *const probe_names[RB_VIEW_RSM_TARGETS] = {
@@ -514,14 +514,15 @@ static void write_lights(const struct rb_integrator *it, struct rb_bdpt_frame *b
     const struct rb_gpu_light *gl = it->frame.lights.mapped;
     double total = 0.0;
     float beam = 2.0f * b->scene_radius; /* write_shadow_views' box: 2 radius across */
-    for (uint32_t i = 0; i < m->light_count; i++) {
+    uint32_t count = m->light_count - m->layer_light_count; /* the layers' are not bdpt's */
+    for (uint32_t i = 0; i < count; i++) {
         float density, cos_outer;
         total += light_power(&m->lights[i], &gl[i], beam, &density, &cos_outer);
         out[i] = (struct rb_gpu_bdpt_light){.choice = {0.0f, 0.0f, density, cos_outer}};
     }
     b->punctual_power = (float)total;
     double cdf = 0.0;
-    for (uint32_t i = 0; i < m->light_count && total > 0.0; i++) {
+    for (uint32_t i = 0; i < count && total > 0.0; i++) {
         float density, cos_outer;
         double power = light_power(&m->lights[i], &gl[i], beam, &density, &cos_outer);
         cdf += power;
@@ -549,7 +550,7 @@ static void record_rsm(struct rb_integrator *it, struct bdpt *d, VkCommandBuffer
     };
     rb_integrator_pass_begin(it, cmd, "rsm", uses, COUNT(uses));
     const struct rb_gpu_light *lights = frame->lights.mapped;
-    for (uint32_t i = 0; i < frame->light_count; i++) {
+    for (uint32_t i = 0; i < frame->light_count - frame->layer_light_count; i++) {
         int first = (int)lights[i].color[3];
         if (first < 0)
             continue;

@@ -76,6 +76,14 @@ enum rb_status rb_integrator_create_with(const struct rb_integrator_desc *desc,
         .speed = desc->job->animation.speed,
         .loop = desc->job->animation.loop,
     };
+    if (!ops->has_emitter_lights && rb_frame_has_blended(desc->scene)) {
+        it->cur.has_layer_lights = true;
+        it->cur.layer_env_count = rb_layer_env_lights(desc->job, desc->env_rgba, desc->env_width_px,
+                                                      desc->env_height_px, it->cur.layer_env);
+        it->prev.has_layer_lights = true;
+        it->prev.layer_env_count = it->cur.layer_env_count;
+        memcpy(it->prev.layer_env, it->cur.layer_env, sizeof(it->cur.layer_env));
+    }
     if ((st = rb_scene_pose_create(desc->scene, &it->cur.pose, err)) ||
         (st = rb_scene_pose_create(desc->scene, &it->prev.pose, err)) ||
         (st = rb_moment_lights_init(desc->job, desc->scene, &it->cur, err)) ||

@@ -593,16 +593,27 @@ enum rb_status rb_frame_init(struct rb_gpu *gpu, const struct rb_integrator_desc
 
     /* Lights keep their kinds over the sequence, so shadow layers are assigned once. */
     frame->light_count = first->light_count;
+    frame->layer_light_count = first->layer_light_count;
+    uint32_t own = first->light_count - first->layer_light_count;
     for (uint32_t i = 0; i < first->light_count; i++) {
         uint32_t need = shadow_layers_for(first->lights[i].type);
         if (frame->shadow_layer_count + need > RB_MAX_SHADOW_LAYERS) {
-            rb_log(RB_LOG_WARN,
-                   "light %u and later lights cast no shadows: more than %d "
-                   "shadow-map layers would be needed",
-                   i, RB_MAX_SHADOW_LAYERS);
+            if (i < own)
+                rb_log(RB_LOG_WARN,
+                       "light %u and later lights cast no shadows: more than %d "
+                       "shadow-map layers would be needed",
+                       i, RB_MAX_SHADOW_LAYERS);
+            else
+                rb_log(RB_LOG_WARN,
+                       "%u of the %u lights of the blended surfaces (emitter samples, then "
+                       "environment directions) light nothing: more than %d shadow-map layers "
+                       "would be needed",
+                       first->light_count - i, first->layer_light_count, RB_MAX_SHADOW_LAYERS);
             break;
         }
         frame->shadow_layer_count += need;
+        if (i < own)
+            frame->own_shadow_layer_count = frame->shadow_layer_count;
     }
     uint32_t shadow_size = job->integrator.direct.shadow_size_px;
     st = rb_frame_buffer(
@@ -708,6 +719,56 @@ void rb_frame_release(struct rb_gpu *gpu, struct rb_frame *frame)
     memset(frame, 0, sizeof(*frame));
 }
 
+uint32_t rb_layer_env_lights(const struct rb_job *job, const float *rgba, uint32_t w, uint32_t h,
+                             struct rb_world_light out[RB_LAYER_ENV_LIGHTS])
+{
+    const uint32_t n = RB_LAYER_ENV_LIGHTS;
+    float k = job->environment.intensity;
+    struct rb_vec3 dir[RB_LAYER_ENV_LIGHTS]; /* towards the environment */
+    double sum[RB_LAYER_ENV_LIGHTS][3] = {{0}};
+    for (uint32_t i = 0; i < n; i++) {
+        double y = 1.0 - (2.0 * i + 1.0) / n, r = sqrt(1.0 - y * y);
+        double phi = i * RB_PI * (3.0 - sqrt(5.0)); /* the golden angle */
+        dir[i] = rb_v3((float)(r * cos(phi)), (float)y, (float)(r * sin(phi)));
+    }
+    if (!rgba || !w || !h) {
+        for (uint32_t i = 0; i < n; i++)
+            for (int c = 0; c < 3; c++)
+                sum[i][c] = job->environment.color[c] * 4.0 * RB_PI / n;
+    } else {
+        /* Each texel's direction as rb_equirect_uv maps it (u from atan(x, -z), v = 0 at +Y,
+         * the map turned by the rotation about +Y), and its solid angle. */
+        float rot = job->environment.rotation_deg * (float)RB_PI / 180.0f;
+        float cr = cosf(-rot), sr = sinf(-rot);
+        for (uint32_t y = 0; y < h; y++) {
+            double theta = (y + 0.5) / h * RB_PI, st = sin(theta);
+            double area = (2.0 * RB_PI / w) * (RB_PI / h) * st;
+            for (uint32_t x = 0; x < w; x++) {
+                double phi = ((x + 0.5) / w - 0.5) * 2.0 * RB_PI;
+                float m[3] = {(float)(st * sin(phi)), (float)cos(theta), (float)(-st * cos(phi))};
+                struct rb_vec3 d = rb_v3(cr * m[0] - sr * m[2], m[1], sr * m[0] + cr * m[2]);
+                uint32_t best = 0;
+                for (uint32_t i = 1; i < n; i++)
+                    if (rb_v3_dot(d, dir[i]) > rb_v3_dot(d, dir[best]))
+                        best = i;
+                const float *t = &rgba[((size_t)y * w + x) * 4];
+                for (int c = 0; c < 3; c++)
+                    sum[best][c] += t[c] * area;
+            }
+        }
+    }
+    bool any = false;
+    for (uint32_t i = 0; i < n; i++) {
+        out[i] = (struct rb_world_light){.type = RB_LIGHT_DIRECTIONAL,
+                                         .direction = rb_v3_scale(dir[i], -1.0f)};
+        for (int c = 0; c < 3; c++) {
+            out[i].color[c] = (float)(sum[i][c] * k);
+            any = any || out[i].color[c] > 0.0f;
+        }
+    }
+    return any ? n : 0;
+}
+
 enum rb_status rb_moment_evaluate(const struct rb_job *job, const struct rb_scene *scene,
                                   const struct rb_anim_selection *sel, double time_s,
                                   struct rb_moment *m, struct rb_err *err)
@@ -718,11 +779,19 @@ enum rb_status rb_moment_evaluate(const struct rb_job *job, const struct rb_scen
         return st;
     uint32_t cap = m->light_capacity;
     uint32_t total = rb_scene_world_lights(job, scene, m->setup, m->pose, m->lights, cap);
-    if (m->has_emitter_lights) {
+    uint32_t world = total;
+    if (m->has_emitter_lights || m->has_layer_lights) {
         uint32_t at = total < cap ? total : cap;
         total += rb_scene_emitter_lights(scene, m->pose, job->integrator.direct.emitter_lights,
                                          m->lights + at, cap - at);
     }
+    if (m->has_layer_lights) {
+        for (uint32_t i = 0; i < m->layer_env_count; i++)
+            if (total + i < cap)
+                m->lights[total + i] = m->layer_env[i];
+        total += m->layer_env_count;
+    }
+    m->layer_light_count = m->has_layer_lights ? total - world : 0;
     if (total > cap)
         RB_BUG("%u lights in a moment made for %u", total, cap);
     m->light_count = total;
@@ -733,8 +802,10 @@ enum rb_status rb_moment_lights_init(const struct rb_job *job, const struct rb_s
                                      struct rb_moment *m, struct rb_err *err)
 {
     uint64_t cap = rb_scene_world_lights(job, scene, m->setup, m->pose, NULL, 0);
-    if (m->has_emitter_lights)
+    if (m->has_emitter_lights || m->has_layer_lights)
         cap += job->integrator.direct.emitter_lights;
+    if (m->has_layer_lights)
+        cap += m->layer_env_count;
     if (cap > UINT32_MAX / sizeof(struct rb_gpu_light))
         return rb_errf(err, RB_E_UNSUPPORTED, "%s%s%llu lights: more than a light buffer holds",
                        RB_JOB_AT(job->at.lights), (unsigned long long)cap);
@@ -876,7 +947,7 @@ void rb_frame_write_globals(struct rb_frame *frame, const struct rb_job *job, in
     g->camera_pos[3] = cur->camera.fov_y_rad;
     g->size[0] = frame->width_px;
     g->size[1] = frame->height_px;
-    g->size[2] = frame->light_count;
+    g->size[2] = frame->light_count - frame->layer_light_count;
     g->size[3] = (uint32_t)frame_index;
     g->env[0] = job->environment.intensity;
     g->env[1] = job->environment.rotation_deg * RB_PI / 180.0f;
@@ -885,6 +956,7 @@ void rb_frame_write_globals(struct rb_frame *frame, const struct rb_job *job, in
     g->shadow[0] = job->integrator.direct.shadow_bias;
     g->shadow[1] = job->integrator.direct.pcf_radius_px;
     g->shadow[2] = (float)frame->shadow_maps.width_px;
+    g->shadow[3] = (float)frame->layer_light_count;
 
     struct rb_gpu_light *lights = frame->lights.mapped;
     struct rb_gpu_shadow_view *views = frame->shadow_views.mapped;
@@ -901,6 +973,9 @@ void rb_frame_write_globals(struct rb_frame *frame, const struct rb_job *job, in
         memcpy(o->color,
                (float[4]){l->color[0], l->color[1], l->color[2], shadowed ? (float)layer : -1.0f},
                16);
+        /* A layer light without a shadow map would light the layers through every wall. */
+        if (!shadowed && i >= frame->light_count - frame->layer_light_count)
+            memset(o->color, 0, 3 * sizeof(float));
         o->cone[0] = cosf(l->inner_cone_rad);
         o->cone[1] = cosf(l->outer_cone_rad);
         if (shadowed)

@@ -8,6 +8,10 @@
 
 #define COUNT(a) (sizeof(a) / sizeof((a)[0]))
 
+/* The environment's directions that light the blended layers of bdpt and hybrid (one shadow
+ * layer each). */
+#define RB_LAYER_ENV_LIGHTS 12
+
 /* Everything the CPU knows about one time: the pose, the camera, the lights. */
 struct rb_moment {
     const struct rb_scene_setup *setup; /* the job's, borrowed from the integrator */
@@ -16,6 +20,14 @@ struct rb_moment {
     struct rb_world_light *lights; /* light_capacity of them (rb_moment_lights_init) */
     uint32_t light_count, light_capacity;
     bool has_emitter_lights; /* the emitters' point samples follow the lights (the ops' flag) */
+    /* Lights for the blended layers alone (the transparency pass), after all the others: the
+     * emitters' point samples and layer_env, set when the integrator has no emitter lights of
+     * its own and the scene has a blended material (bdpt, hybrid). Its passes leave them out:
+     * they sample emitters and the environment their own ways. */
+    bool has_layer_lights;
+    uint32_t layer_light_count; /* the trailing lights that are layer lights */
+    struct rb_world_light layer_env[RB_LAYER_ENV_LIGHTS];
+    uint32_t layer_env_count; /* rb_layer_env_lights's */
 };
 
 /* What the driver hands an integrator's record function: the frame being recorded. */
@@ -111,6 +123,15 @@ void rb_frame_release(struct rb_gpu *gpu, struct rb_frame *frame);
 /* Whether a material of the scene is blended (glTF alphaMode BLEND): then the frame has a
  * transparency image and the frame's passes end with the transparency pass. */
 bool rb_frame_has_blended(const struct rb_scene *scene);
+
+/* The environment as directional lights for the blended layers (struct rb_moment's
+ * layer_env): RB_LAYER_ENV_LIGHTS directions spread evenly over the sphere (a Fibonacci
+ * lattice), each carrying the environment's light over its cell, the directions nearer it than
+ * any other: the radiance integrated over those solid angles, from the map's texels (rgba,
+ * equirectangular, w x h; NULL: the job's uniform colour, L 4 pi / N each). Returns their
+ * count: 0 for a black environment. */
+uint32_t rb_layer_env_lights(const struct rb_job *job, const float *rgba, uint32_t w, uint32_t h,
+                             struct rb_world_light out[RB_LAYER_ENV_LIGHTS]);
 
 /* Evaluates animation, camera and lights at time_s. */
 /* Allocates m->lights for every light a moment of the job can have: the job's, the scene's and,

@@ -1417,8 +1417,8 @@ void rb_job_rehash(struct rb_job *job)
         h = h_u32(h, job->integrator.direct.shadow_size_px);
         h = h_f32(h, job->integrator.direct.shadow_bias);
         h = h_f32(h, job->integrator.direct.pcf_radius_px);
-        if (kind == RB_INTEGRATOR_DIRECT)
-            h = h_u32(h, job->integrator.direct.emitter_lights);
+        /* direct's emitter lights; bdpt's and hybrid's blended layers' */
+        h = h_u32(h, job->integrator.direct.emitter_lights);
     }
     if (kind == RB_INTEGRATOR_BDPT) {
         const struct rb_job_bdpt *b = &job->integrator.bdpt;

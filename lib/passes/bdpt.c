@@ -321,7 +321,8 @@ void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_EMITTER_CDF, &b->emitter_cdf);
     rb_pass_record_bindings(cmd, &bind);
     struct rb_gpu_bdpt_generate_push pc = {
-        .counts = {b->vpl_count, b->bundle_count, frame->light_count, b->rsm[0].width_px},
+        .counts = {b->vpl_count, b->bundle_count, frame->light_count - frame->layer_light_count,
+                   b->rsm[0].width_px},
         .scene = {b->scene_centre[0], b->scene_centre[1], b->scene_centre[2], b->scene_radius},
         .sizes = {(float)b->bundle_size_px, (float)b->vpl_size_px, b->punctual_power,
                   (float)b->emitter_count},

@@ -79,6 +79,9 @@ struct rb_frame {
     struct rb_gpu_buffer lights;       /* struct rb_gpu_light, host-visible */
     struct rb_gpu_buffer shadow_views; /* struct rb_gpu_shadow_view, host-visible */
     uint32_t light_count, shadow_layer_count;
+    /* The last layer_light_count lights light the blended layers alone (the globals' shadow.w);
+     * the integrator's passes read the others (size.z), whose shadow layers come first. */
+    uint32_t layer_light_count, own_shadow_layer_count;
     struct rb_gpu_image shadow_maps;  /* R32F array, a view per layer */
     struct rb_gpu_image shadow_depth; /* D32 scratch depth for rendering a layer */
     struct rb_gpu_image env_map;      /* RGBA32F equirectangular (1x1 when none) */

@@ -40,7 +40,8 @@
  *   alpha, over 1 - alpha times the light behind it, whose path goes on through it. In the
  *   direct path space that is the direct integrator's transparency exactly (up to shadow maps
  *   against exact visibility); in bdpt and full the layer also gets the emissive triangles'
- *   and the environment's direct light, which bdpt's and the hybrid's layers do not.
+ *   and the environment's direct light, which bdpt's and the hybrid's layers approximate by
+ *   their layer lights (the emitters' point samples and the environment's directions).
  * - Layers: direct = emission at x1 + light reaching x1 after exactly one scattering + the
  *   environment on camera misses (the blended layers' light composited into it); indirect =
  *   the rest (scaled by the layers' 1 - alpha); beauty = direct + indirect, alpha 1 on a hit

@@ -5,13 +5,18 @@
 #ifndef RB_PUNCTUAL_GLSL
 #define RB_PUNCTUAL_GLSL
 
+// The lights it sums: the frame's (size.z); the transparency pass adds the layer lights.
+#ifndef RB_PUNCTUAL_LIGHT_COUNT
+#define RB_PUNCTUAL_LIGHT_COUNT g.size.z
+#endif
+
 // acc plus each light's reflected radiance, added in light order (n: shading normal, ng:
 // geometric normal, both on v's side).
 vec3 rb_punctual_light(vec3 acc, vec3 p, vec3 n, vec3 ng, vec3 v, vec3 c_diff, vec3 f0, float f90,
                        float roughness)
 {
     vec3 radiance = acc;
-    for (uint i = 0; i < g.size.z; i++) {
+    for (uint i = 0; i < RB_PUNCTUAL_LIGHT_COUNT; i++) {
         rb_gpu_light L = lights[i];
         uint kind = uint(L.position.w);
         vec3 l;

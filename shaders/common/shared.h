@@ -41,7 +41,8 @@ struct rb_gpu_globals {
     RB_UVEC4(size);       /* width, height, light count, frame */
     RB_VEC4(env);         /* intensity, rotation (rad), has map (0/1), unused */
     RB_VEC4(env_color);   /* rgb radiance without a map */
-    RB_VEC4(shadow);      /* bias (fraction of distance), pcf radius (texels), map size, unused */
+    RB_VEC4(shadow);      /* bias (fraction of distance), pcf radius (texels), map size, layer
+                           * lights: after size.z, for the blended layers alone */
 };
 
 /* The animate pass's output and the raster passes' input: world space. */

@@ -9,6 +9,12 @@
  *                              (every material OPAQUE); and a job for each (blend.yaml,
  *                              opaque.yaml, none.yaml, plain.yaml; the integrator is the
  *                              command line's)
+ *   blendscene area DIR        writes DIR/area.gltf and DIR/area.yaml: the blended scene with
+ *                              no punctual light, lit by an emissive quad above the front quads
+ *                              and a uniform sky-blue environment; area-opaque.gltf and
+ *                              area-opaque.yaml the same with the four front quads OPAQUE
+ *   blendscene mask OPAQUE OUT writes the PNG mask of the four front quads' interior pixels
+ *                              (as show finds them in OPAQUE) for raybundle compare --mask
  *   blendscene show|exact BLEND OPAQUE NONE
  *                              checks three renders of the same integrator: where OPAQUE's
  *                              albedo is a quad's colour (its interior: the four neighbours
@@ -31,6 +37,7 @@
 #include "io/io.h"
 
 #define QUADS 7
+#define EMITTER QUADS /* the area light's quad, in the area-lit scene alone */
 #define FRONT_FIRST 2 /* quads 2..5 are the four in front */
 #define FRONT_COUNT 4
 #define TEXTURED 5
@@ -45,7 +52,7 @@ struct quad {
     float alpha;
 };
 
-static const struct quad quads[QUADS] = {
+static const struct quad quads[QUADS + 1] = {
     {{{-4, 0, 3}, {4, 0, 3}, {4, 0, -3}, {-4, 0, -3}},
      {0, 1, 0},
      {0.6f, 0.6f, 0.6f},
@@ -71,6 +78,10 @@ static const struct quad quads[QUADS] = {
      {0, 0, 1},
      {0.8f, 0.8f, 0.1f},
      0.5f},
+    {{{-1.0f, 2.6f, 1.4f}, {1.0f, 2.6f, 1.4f}, {1.0f, 2.6f, 0.4f}, {-1.0f, 2.6f, 0.4f}},
+     {0, -1, 0},
+     {1, 1, 1},
+     1}, /* the area light: emissive, facing down */
 };
 
 static int test_no, failures;
@@ -108,13 +119,16 @@ static void base64(const unsigned char *in, size_t n, char *out)
 
 /* mode: "BLEND", "OPAQUE" or NULL (the four front quads absent); is_plain: the yellow quad
  * OPAQUE too, so that no material blends. */
-static int write_scene(const char *dir, const char *name, const char *mode, bool is_plain)
+static int write_scene(const char *dir, const char *name, const char *mode, bool is_plain,
+                       bool is_area)
 {
     /* Per quad: 4 positions, 4 normals, 4 uvs, 6 indices (uint16), in four bufferViews. */
-    enum { POS = QUADS * 4 * 12, NRM = POS, UV = QUADS * 4 * 8, IDX = QUADS * 12 };
-    static unsigned char buf[POS + NRM + UV + IDX];
+    const int n = is_area ? QUADS + 1 : QUADS;
+    const int POS = n * 4 * 12, NRM = POS, UV = n * 4 * 8, IDX = n * 12;
+    static unsigned char buf[(QUADS + 1) * (4 * 12 * 2 + 4 * 8 + 12)];
     static char enc[4 * ((sizeof(buf) + 2) / 3) + 1];
-    for (int q = 0; q < QUADS; q++) {
+    const size_t bytes = (size_t)(POS + NRM + UV + IDX);
+    for (int q = 0; q < n; q++) {
         for (int v = 0; v < 4; v++) {
             memcpy(buf + (size_t)(q * 4 + v) * 12, quads[q].p[v], 12);
             memcpy(buf + POS + (size_t)(q * 4 + v) * 12, quads[q].n, 12);
@@ -124,7 +138,7 @@ static int write_scene(const char *dir, const char *name, const char *mode, bool
         static const uint16_t idx[6] = {0, 1, 2, 0, 2, 3};
         memcpy(buf + POS + NRM + UV + (size_t)q * 12, idx, 12);
     }
-    base64(buf, sizeof(buf), enc);
+    base64(buf, bytes, enc);
     char path[4096];
     snprintf(path, sizeof(path), "%s/%s", dir, name);
     FILE *f = fopen(path, "w");
@@ -133,23 +147,23 @@ static int write_scene(const char *dir, const char *name, const char *mode, bool
         return 1;
     }
     fprintf(f, "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[");
-    for (int q = 0, first = 1; q < QUADS; q++) {
+    for (int q = 0, first = 1; q < n; q++) {
         if (!mode && q >= FRONT_FIRST && q < FRONT_FIRST + FRONT_COUNT)
             continue;
         fprintf(f, "%s%d", first ? "" : ",", q);
         first = 0;
     }
     fprintf(f, "]}],\"nodes\":[");
-    for (int q = 0; q < QUADS; q++)
+    for (int q = 0; q < n; q++)
         fprintf(f, "%s{\"mesh\":%d,\"name\":\"Quad%d\"}", q ? "," : "", q, q);
     fprintf(f, "],\"meshes\":[");
-    for (int q = 0; q < QUADS; q++)
+    for (int q = 0; q < n; q++)
         fprintf(f,
                 "%s{\"primitives\":[{\"attributes\":{\"POSITION\":%d,\"NORMAL\":%d,"
                 "\"TEXCOORD_0\":%d},\"indices\":%d,\"material\":%d}]}",
                 q ? "," : "", q * 4, q * 4 + 1, q * 4 + 2, q * 4 + 3, q);
     fprintf(f, "],\"materials\":[");
-    for (int q = 0; q < QUADS; q++) {
+    for (int q = 0; q < n; q++) {
         const struct quad *s = &quads[q];
         bool front = q >= FRONT_FIRST && q < FRONT_FIRST + FRONT_COUNT;
         const char *alpha_mode = q == QUADS - 1 && !is_plain ? "BLEND"
@@ -158,10 +172,13 @@ static int write_scene(const char *dir, const char *name, const char *mode, bool
         fprintf(f,
                 "%s{\"name\":\"M%d\",\"doubleSided\":true,\"alphaMode\":\"%s\","
                 "\"pbrMetallicRoughness\":{\"baseColorFactor\":[%g,%g,%g,%g],"
-                "\"metallicFactor\":0,\"roughnessFactor\":0.6%s}}",
+                "\"metallicFactor\":0,\"roughnessFactor\":0.6%s}%s}",
                 q ? "," : "", q, alpha_mode, (double)s->color[0], (double)s->color[1],
                 (double)s->color[2], (double)s->alpha,
-                q == TEXTURED ? ",\"baseColorTexture\":{\"index\":0}" : "");
+                q == TEXTURED ? ",\"baseColorTexture\":{\"index\":0}" : "",
+                q == EMITTER ? ",\"emissiveFactor\":[1,0.9,0.8],\"extensions\":"
+                               "{\"KHR_materials_emissive_strength\":{\"emissiveStrength\":6}}"
+                             : "");
     }
     fprintf(
         f,
@@ -173,8 +190,8 @@ static int write_scene(const char *dir, const char *name, const char *mode, bool
         "{\"buffer\":0,\"byteOffset\":%d,\"byteLength\":%d},"
         "{\"buffer\":0,\"byteOffset\":%d,\"byteLength\":%d},"
         "{\"buffer\":0,\"byteOffset\":%d,\"byteLength\":%d}],\"accessors\":[",
-        sizeof(buf), enc, POS, POS, NRM, POS + NRM, UV, POS + NRM + UV, IDX);
-    for (int q = 0; q < QUADS; q++) {
+        bytes, enc, POS, POS, NRM, POS + NRM, UV, POS + NRM + UV, IDX);
+    for (int q = 0; q < n; q++) {
         float lo[3], hi[3];
         for (int a = 0; a < 3; a++) {
             lo[a] = hi[a] = quads[q].p[0][a];
@@ -195,7 +212,32 @@ static int write_scene(const char *dir, const char *name, const char *mode, bool
                 q ? "," : "", q * 48, (double)lo[0], (double)lo[1], (double)lo[2], (double)hi[0],
                 (double)hi[1], (double)hi[2], q * 48, q * 32, q * 12);
     }
-    fprintf(f, "]}\n");
+    fprintf(f, "]%s}\n",
+            is_area ? ",\"extensionsUsed\":[\"KHR_materials_emissive_strength\"]" : "");
+    return fclose(f) != 0;
+}
+
+/* The area-lit variant: no punctual light; the emissive quad and a sky-blue environment light
+ * the same blended quads. */
+static int write_area_job(const char *dir, const char *name)
+{
+    char path[4096];
+    snprintf(path, sizeof(path), "%s/%s.yaml", dir, name);
+    FILE *f = fopen(path, "w");
+    if (!f) {
+        perror(path);
+        return 1;
+    }
+    fprintf(f,
+            "scene: %s.gltf\n"
+            "output: %s/frame.####.exr\n"
+            "resolution: [160, 100]\n"
+            "frames: {start: 0, end: 0}\n"
+            "camera:\n"
+            "  fov_y_deg: 40\n"
+            "  keys: [{t: 0, position: [0, 1.2, 4.5], look_at: [0, 0.8, -0.5]}]\n"
+            "environment: {color: [0.1, 0.13, 0.18]}\n",
+            name, name);
     return fclose(f) != 0;
 }
 
@@ -223,7 +265,7 @@ static int write_job(const char *dir, const char *name)
     return fclose(f) != 0;
 }
 
-static int write_all(const char *dir)
+static int write_alpha(const char *dir)
 {
     uint8_t rgba[TEX_SIZE * TEX_SIZE * 4];
     for (int y = 0; y < TEX_SIZE; y++)
@@ -239,11 +281,23 @@ static int write_all(const char *dir)
         fprintf(stderr, "blendscene: %s\n", err.msg);
         return 1;
     }
-    return write_scene(dir, "blend.gltf", "BLEND", false) ||
-           write_scene(dir, "opaque.gltf", "OPAQUE", false) ||
-           write_scene(dir, "none.gltf", NULL, false) ||
-           write_scene(dir, "plain.gltf", "OPAQUE", true) || write_job(dir, "blend") ||
+    return 0;
+}
+
+static int write_all(const char *dir)
+{
+    return write_alpha(dir) || write_scene(dir, "blend.gltf", "BLEND", false, false) ||
+           write_scene(dir, "opaque.gltf", "OPAQUE", false, false) ||
+           write_scene(dir, "none.gltf", NULL, false, false) ||
+           write_scene(dir, "plain.gltf", "OPAQUE", true, false) || write_job(dir, "blend") ||
            write_job(dir, "opaque") || write_job(dir, "none") || write_job(dir, "plain");
+}
+
+static int write_area(const char *dir)
+{
+    return write_alpha(dir) || write_scene(dir, "area.gltf", "BLEND", false, true) ||
+           write_scene(dir, "area-opaque.gltf", "OPAQUE", false, true) ||
+           write_area_job(dir, "area") || write_area_job(dir, "area-opaque");
 }
 
 struct img {
@@ -381,17 +435,61 @@ static int run_checks(bool exact, const char *bp, const char *op, const char *np
     return 0;
 }
 
+/* A mask of the four front quads' interior pixels in the opaque render op (white; black
+ * elsewhere), for raybundle compare --mask: the error of the blended layers alone. */
+static int write_mask(const char *op, const char *out)
+{
+    struct img o = {0};
+    if (load(op, &o))
+        return 1;
+    if (o.albedo < 0) {
+        fprintf(stderr, "blendscene: %s has no albedo\n", op);
+        return 1;
+    }
+    uint32_t w = o.im.width_px, h = o.im.height_px, count = 0;
+    uint8_t *rgba = calloc((size_t)w * h, 4);
+    if (!rgba)
+        return 1;
+    for (uint32_t y = 0; y < h; y++)
+        for (uint32_t x = 0; x < w; x++) {
+            uint8_t *p = &rgba[((size_t)y * w + x) * 4];
+            p[3] = 255;
+            for (int q = FRONT_FIRST; q < FRONT_FIRST + FRONT_COUNT; q++)
+                if (interior(&o, (int)x, (int)y, q)) {
+                    p[0] = p[1] = p[2] = 255;
+                    count++;
+                }
+        }
+    struct rb_err err = RB_ERR_INIT;
+    int rc = 0;
+    if (count < 200) {
+        fprintf(stderr, "blendscene: only %u quad pixels in %s\n", count, op);
+        rc = 1;
+    } else if (rb_io_png_write(out, w, h, rgba, &err)) {
+        fprintf(stderr, "blendscene: %s\n", err.msg);
+        rc = 1;
+    }
+    free(rgba);
+    rb_io_image_release(&o.im);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     if (argc == 3 && !strcmp(argv[1], "scene"))
         return write_all(argv[2]);
+    if (argc == 3 && !strcmp(argv[1], "area"))
+        return write_area(argv[2]);
+    if (argc == 4 && !strcmp(argv[1], "mask"))
+        return write_mask(argv[2], argv[3]);
     if (argc == 5 && (!strcmp(argv[1], "show") || !strcmp(argv[1], "exact"))) {
         if (run_checks(!strcmp(argv[1], "exact"), argv[2], argv[3], argv[4]))
             return 1;
         printf("1..%d\n", test_no);
         return failures ? 1 : 0;
     }
-    fprintf(stderr, "usage: blendscene scene DIR\n"
-                    "       blendscene show|exact BLEND.exr OPAQUE.exr NONE.exr\n");
+    fprintf(stderr, "usage: blendscene scene|area DIR\n"
+                    "       blendscene show|exact BLEND.exr OPAQUE.exr NONE.exr\n"
+                    "       blendscene mask OPAQUE.exr OUT.png\n");
     return 2;
 }
