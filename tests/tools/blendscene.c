@@ -217,31 +217,16 @@ static int write_scene(const char *dir, const char *name, const char *mode, bool
     return fclose(f) != 0;
 }
 
-/* The area-lit variant: no punctual light; the emissive quad and a sky-blue environment light
- * the same blended quads. */
-static int write_area_job(const char *dir, const char *name)
-{
-    char path[4096];
-    snprintf(path, sizeof(path), "%s/%s.yaml", dir, name);
-    FILE *f = fopen(path, "w");
-    if (!f) {
-        perror(path);
-        return 1;
-    }
-    fprintf(f,
-            "scene: %s.gltf\n"
-            "output: %s/frame.####.exr\n"
-            "resolution: [160, 100]\n"
-            "frames: {start: 0, end: 0}\n"
-            "camera:\n"
-            "  fov_y_deg: 40\n"
-            "  keys: [{t: 0, position: [0, 1.2, 4.5], look_at: [0, 0.8, -0.5]}]\n"
-            "environment: {color: [0.1, 0.13, 0.18]}\n",
-            name, name);
-    return fclose(f) != 0;
-}
+/* The job of scene NAME: the same camera, and LIGHTING (the job's lights and environment): the
+ * point light of the plain variants, or, for the area-lit one, none but the emissive quad and a
+ * sky-blue environment. */
+static const char *const POINT_LIT =
+    "lights:\n"
+    "  - {type: point, position: [0.5, 2.6, 2.2], color: [1, 1, 1], intensity: 15}\n"
+    "environment: {color: [0, 0, 0]}\n";
+static const char *const AREA_LIT = "environment: {color: [0.1, 0.13, 0.18]}\n";
 
-static int write_job(const char *dir, const char *name)
+static int write_job(const char *dir, const char *name, const char *lighting)
 {
     char path[4096];
     snprintf(path, sizeof(path), "%s/%s.yaml", dir, name);
@@ -258,10 +243,8 @@ static int write_job(const char *dir, const char *name)
             "camera:\n"
             "  fov_y_deg: 40\n"
             "  keys: [{t: 0, position: [0, 1.2, 4.5], look_at: [0, 0.8, -0.5]}]\n"
-            "lights:\n"
-            "  - {type: point, position: [0.5, 2.6, 2.2], color: [1, 1, 1], intensity: 15}\n"
-            "environment: {color: [0, 0, 0]}\n",
-            name, name);
+            "%s",
+            name, name, lighting);
     return fclose(f) != 0;
 }
 
@@ -289,15 +272,16 @@ static int write_all(const char *dir)
     return write_alpha(dir) || write_scene(dir, "blend.gltf", "BLEND", false, false) ||
            write_scene(dir, "opaque.gltf", "OPAQUE", false, false) ||
            write_scene(dir, "none.gltf", NULL, false, false) ||
-           write_scene(dir, "plain.gltf", "OPAQUE", true, false) || write_job(dir, "blend") ||
-           write_job(dir, "opaque") || write_job(dir, "none") || write_job(dir, "plain");
+           write_scene(dir, "plain.gltf", "OPAQUE", true, false) ||
+           write_job(dir, "blend", POINT_LIT) || write_job(dir, "opaque", POINT_LIT) ||
+           write_job(dir, "none", POINT_LIT) || write_job(dir, "plain", POINT_LIT);
 }
 
 static int write_area(const char *dir)
 {
     return write_alpha(dir) || write_scene(dir, "area.gltf", "BLEND", false, true) ||
            write_scene(dir, "area-opaque.gltf", "OPAQUE", false, true) ||
-           write_area_job(dir, "area") || write_area_job(dir, "area-opaque");
+           write_job(dir, "area", AREA_LIT) || write_job(dir, "area-opaque", AREA_LIT);
 }
 
 struct img {
