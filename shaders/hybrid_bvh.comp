@@ -8,8 +8,8 @@
 // unlimited, one explicit secondary ray: a cosine-weighted diffuse ray from the hit through the
 // BVH, whose own hit sends what the previous frame gathered there (or its baked light) back, so
 // that the hidden surfaces' light has its further bounces too. With a count N, no feedback: the
-// baked light and N - 1 further diffuse bounces through the BVH (rb_hybrid_chain); with 0, the
-// hit reflects nothing. A miss takes the environment, weighed by MIS against hybrid_light's
+// baked light and N - 1 further bounces through the BVH (rb_hybrid_chain); with 0, the hit
+// reflects nothing. A miss takes the environment, weighed by MIS against hybrid_light's
 // samples of it.
 // Both faces of every surface are hit and shaded and emit, as the reference's bounce rays find
 // them; only double-sided materials have their back's light baked.
@@ -78,22 +78,22 @@ void main()
     vec3 baked;
     bool fed = rb_hybrid_feedback(p, n, sf.c_diff, sf.f0, baked);
     uint bounces = rb_hybrid_max_bounces();
+    // the slot's (lobe, ray): its random numbers, rotated apart from the camera ray's
+    uint lobe_ray = slot / (g.size.x * g.size.y);
+    uint lobe = lobe_ray / pc.frame.y;
+    uint k = pc.frame.x * pc.frame.y + lobe_ray % pc.frame.y;
     if (!fed) {
         baked = rb_hybrid_baked(hit.extra, hit.bary, !front);
-        if (bounces >= 2u && max(sf.c_diff.r, max(sf.c_diff.g, sf.c_diff.b)) > 0.0) {
-            // the slot's (lobe, ray): its random numbers, rotated apart from the camera ray's
-            uint lobe_ray = slot / (g.size.x * g.size.y);
-            uint lobe = lobe_ray / pc.frame.y;
-            uint k = pc.frame.x * pc.frame.y + lobe_ray % pc.frame.y;
-            if (bounces == 0xffffffffu)
-                baked += secondary(p, n, ng, rb_hybrid_u(k, px, lobe + 6u));
-            else
-                baked += rb_hybrid_chain(p, n, ng, bounces - 1u, k, px, lobe);
-        }
+        if (bounces == 0xffffffffu && max(sf.c_diff.r, max(sf.c_diff.g, sf.c_diff.b)) > 0.0)
+            baked += secondary(p, n, ng, rb_hybrid_u(k, px, lobe + 6u));
     }
     vec3 lit = bounces == 0u ? vec3(0.0)
-                             : weight * rb_hybrid_shade(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90,
-                                                        sf.roughness, baked, fed);
+                             : rb_hybrid_shade(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90,
+                                               sf.roughness, baked, fed);
+    if (bounces >= 2u && bounces != 0xffffffffu)
+        lit += rb_hybrid_chain(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90, sf.roughness, bounces - 1u,
+                               k, px, lobe);
+    lit *= weight;
     slots[slot].a = vec4(direct, uintBitsToFloat(RB_HYBRID_BVH));
     slots[slot].b = vec4(lit, 0.0);
 }

@@ -206,14 +206,14 @@ void main()
         bool fed = rb_hybrid_feedback(pq.xyz, nq.xyz, aq.rgb, sq.rgb, baked);
         if (!fed)
             baked = rb_hybrid_baked_at(pq.xyz, ngq, pq.w, aq.w, nq.w < 0.0);
-        // A counted path (max_bounces N >= 2) goes on from the hit through the BVH.
         uint bounces = rb_hybrid_max_bounces();
-        if (bounces >= 2u && bounces != 0xffffffffu && max(aq.r, max(aq.g, aq.b)) > 0.0)
-            baked += rb_hybrid_chain(pq.xyz, nq.xyz, ngq, bounces - 1u, pc.frame.x * rays + r, px,
-                                     lobe);
         vec3 lit = bounces == 0u ? vec3(0.0)
                                  : rb_hybrid_shade(pq.xyz, nq.xyz, ngq, -l, aq.rgb, sq.rgb, eq.w,
                                                    sq.a, baked, fed);
+        // A counted path (max_bounces N >= 2) goes on from the hit through the BVH.
+        if (bounces >= 2u && bounces != 0xffffffffu)
+            lit += rb_hybrid_chain(pq.xyz, nq.xyz, ngq, -l, aq.rgb, sq.rgb, eq.w, sq.a,
+                                   bounces - 1u, pc.frame.x * rays + r, px, lobe);
         // Emission found is weighed against the light sample of the same point (its triangle
         // from the G-buffer).
         vec3 found = vec3(0.0);

@@ -26,8 +26,9 @@
  * depends only on the frames since its start: the feedback keeps the history contract below.
  * The feedback cannot stop at a count, so a count N, the reference's path space with its
  * max_bounces N, is traced instead: a hit reflects its direct light (punctual and baked) and
- * N - 1 further diffuse bounces, a chain of rays through the BVH each lit the same way
- * (rb_hybrid_chain); 1 is direct light alone, 0 nothing. No frame reads another's light then.
+ * N - 1 further bounces, a chain of rays through the BVH weighed by the BRDFs, each hit lit the
+ * same way (rb_hybrid_chain); 1 is direct light alone, 0 nothing. No frame reads another's light
+ * then.
  *
  * History. Two accumulators take every sample; accumulator A starts again on the frames
  * sequence_start + kW, B on sequence_start + kW + W/2 (and both on sequence_start), W =

@@ -532,8 +532,8 @@ bool rb_hybrid_feedback(vec3 p, vec3 n, vec3 c_diff, vec3 f0, out vec3 light)
 
 // A BVH hit's surface: position, shading and geometric normals on the side the ray d arrives
 // from (front: whether that is the triangle's front), and its material.
-void rb_hybrid_bvh_surface(vec3 o, vec3 d, rb_bvh_hit hit, out vec3 p, out vec3 n, out vec3 ng, out bool front,
-                           out rb_surface sf)
+void rb_hybrid_bvh_surface(vec3 o, vec3 d, rb_bvh_hit hit, out vec3 p, out vec3 n, out vec3 ng,
+                           out bool front, out rb_surface sf)
 {
     uint t = hit.triangle;
     rb_gpu_vertex v0 = verts[indices[3u * t]], v1 = verts[indices[3u * t + 1u]],
@@ -565,14 +565,15 @@ uint rb_hybrid_max_bounces()
 }
 
 // A counted path's further bounces from a hit (p, shading normal n, geometric normal ng, on the
-// side the ray arrived from): `count` cosine-weighted diffuse rays through the BVH, one from
-// each hit the last one found, each hit lit as a hit of one bounce is (the punctual lights'
-// shadow-mapped light and its baked light through its diffuse albedo), what each brings weighed
-// by the albedos before it. What the path sends back to p, per unit albedo at p, but emission
-// (the emitters' and the environment's light at each vertex is its bake's). Random numbers:
-// sample k of the pixel's R2 sequence, a rotation of its own a bounce (the first one's is the
-// hidden hit's secondary ray's, 6 + lobe).
-vec3 rb_hybrid_chain(vec3 p, vec3 n, vec3 ng, uint count, uint k, ivec2 px, uint lobe)
+// side the ray arrived from; v toward where the ray came from; its material): `count`
+// cosine-weighted rays through the BVH, one from each hit the last one found, each hit lit as a
+// hit of one bounce is (the punctual lights' shadow-mapped light and its baked light through its
+// diffuse albedo), what each brings weighed by the BRDFs (both lobes) before it. The light the
+// path sends from p toward v, but emission (the emitters' and the environment's light at each
+// vertex is its bake's). Random numbers: sample k of the pixel's R2 sequence, a rotation of its
+// own a bounce (the first one's is the hidden hit's secondary ray's, 6 + lobe).
+vec3 rb_hybrid_chain(vec3 p, vec3 n, vec3 ng, vec3 v, vec3 c_diff, vec3 f0, float f90,
+                     float roughness, uint count, uint k, ivec2 px, uint lobe)
 {
     vec3 sum = vec3(0.0), beta = vec3(1.0);
     for (uint j = 0u; j < count; j++) {
@@ -583,23 +584,25 @@ vec3 rb_hybrid_chain(vec3 p, vec3 n, vec3 ng, uint count, uint k, ivec2 px, uint
         vec3 l = normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(1.0 - u.x, 0.0)) * n);
         if (dot(ng, l) <= 0.0)
             break;
+        // BRDF x cosine over the cosine-weighted pdf
+        beta *= RB_PI * rb_brdf(n, v, l, c_diff, f0, f90, roughness);
+        if (!(max(beta.r, max(beta.g, beta.b)) > 0.0))
+            break;
         vec3 o = p + ng * (1e-4 * length(p - g.camera_pos.xyz) + 1e-6 * pc.scene.x);
         rb_bvh_hit hit;
         if (!rb_bvh_intersect(o, l, 0.0, 1e30, hit))
             break;
-        vec3 q, nq, ngq;
         bool front;
         rb_surface sf;
-        rb_hybrid_bvh_surface(o, l, hit, q, nq, ngq, front, sf);
+        rb_hybrid_bvh_surface(o, l, hit, p, n, ng, front, sf);
         vec3 baked = rb_hybrid_baked(hit.extra, hit.bary, !front);
-        sum += beta * rb_hybrid_shade(q, nq, ngq, -l, sf.c_diff, sf.f0, sf.f90, sf.roughness,
-                                      baked, false);
-        beta *= sf.c_diff;
-        if (!(max(beta.r, max(beta.g, beta.b)) > 0.0))
-            break;
-        p = q;
-        n = nq;
-        ng = ngq;
+        sum += beta * rb_hybrid_shade(p, n, ng, -l, sf.c_diff, sf.f0, sf.f90, sf.roughness, baked,
+                                      false);
+        v = -l;
+        c_diff = sf.c_diff;
+        f0 = sf.f0;
+        f90 = sf.f90;
+        roughness = sf.roughness;
     }
     return sum;
 }
