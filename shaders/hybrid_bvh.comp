@@ -4,11 +4,13 @@
 // camera vertex's direct light (weighed by MIS against hybrid_light's samples, with the pdf the
 // ray carries), the punctual lights' shadow-mapped light and what the previous frame gathered
 // at the hit (rb_hybrid_feedback), or where it saw no such thing (a surface the camera does not
-// see) the triangle's baked light of the emitters and the environment plus, with feedback on,
-// one explicit secondary ray: a cosine-weighted diffuse ray from the hit through the BVH, whose
-// own hit sends what the previous frame gathered there (or its baked light) back, so that the
-// hidden surfaces' light has its further bounces too; a miss takes the environment, weighed by
-// MIS against hybrid_light's samples of it.
+// see) the triangle's baked light of the emitters and the environment plus, with max_bounces
+// unlimited, one explicit secondary ray: a cosine-weighted diffuse ray from the hit through the
+// BVH, whose own hit sends what the previous frame gathered there (or its baked light) back, so
+// that the hidden surfaces' light has its further bounces too. With a count N, no feedback: the
+// baked light and N - 1 further bounces through the BVH (rb_hybrid_chain); with 0, the hit
+// reflects nothing. A miss takes the environment, weighed by MIS against hybrid_light's
+// samples of it.
 // Both faces of every surface are hit and shaded and emit, as the reference's bounce rays find
 // them; only double-sided materials have their back's light baked.
 #version 460
@@ -17,33 +19,6 @@
 layout(local_size_x = 64) in;
 
 #include "hybrid.glsl"
-
-// A BVH hit's surface: position, shading and geometric normals on the side the ray d arrives
-// from (front: whether that is the triangle's front), and its material.
-void surface(vec3 o, vec3 d, rb_bvh_hit hit, out vec3 p, out vec3 n, out vec3 ng, out bool front,
-             out rb_surface sf)
-{
-    uint t = hit.triangle;
-    rb_gpu_vertex v0 = verts[indices[3u * t]], v1 = verts[indices[3u * t + 1u]],
-                  v2 = verts[indices[3u * t + 2u]];
-    vec3 b = vec3(1.0 - hit.bary.x - hit.bary.y, hit.bary);
-    ng = normalize(cross(v1.position.xyz - v0.position.xyz, v2.position.xyz - v0.position.xyz));
-    n = normalize(b.x * v0.normal.xyz + b.y * v1.normal.xyz + b.z * v2.normal.xyz);
-    vec2 uv = b.x * v0.uv.xy + b.y * v1.uv.xy + b.z * v2.uv.xy;
-    rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
-    front = dot(ng, d) < 0.0;
-    if (!front)
-        ng = -ng;
-    if (dot(n, ng) < 0.0)
-        n = -n;
-    if (m.textures.z >= 0) {
-        vec4 tangent = b.x * v0.tangent + b.y * v1.tangent + b.z * v2.tangent;
-        vec3 tn = textureLod(linear_textures, vec3(uv, float(m.textures.z)), 0.0).xyz;
-        n = rb_normal_map(n, tangent, tn * 2.0 - 1.0, m.emissive.w);
-    }
-    sf = rb_material_eval(m, uv, srgb_textures, linear_textures);
-    p = o + hit.t * d;
-}
 
 // The light a hidden hit (p, n, ng) gathers beyond its direct light, by one cosine-weighted ray
 // with random numbers u: what the surface that ray finds sends back but its emission (the
@@ -63,7 +38,7 @@ vec3 secondary(vec3 p, vec3 n, vec3 ng, vec2 u)
     vec3 q, nq, ngq;
     bool front;
     rb_surface sf;
-    surface(o, l, hit, q, nq, ngq, front, sf);
+    rb_hybrid_bvh_surface(o, l, hit, q, nq, ngq, front, sf);
     vec3 light;
     bool fed = rb_hybrid_feedback(q, nq, sf.c_diff, sf.f0, light);
     if (!fed)
@@ -96,24 +71,29 @@ void main()
     vec3 p, n, ng;
     bool front;
     rb_surface sf;
-    surface(o, d, hit, p, n, ng, front, sf);
+    rb_hybrid_bvh_surface(o, d, hit, p, n, ng, front, sf);
     vec3 direct = weight * sf.emission;
     if (max(direct.r, max(direct.g, direct.b)) > 0.0)
         direct *= rb_hybrid_emit_weight(hit.triangle, d, hit.t, s.b.w);
     vec3 baked;
     bool fed = rb_hybrid_feedback(p, n, sf.c_diff, sf.f0, baked);
+    uint bounces = rb_hybrid_max_bounces();
+    // the slot's (lobe, ray): its random numbers, rotated apart from the camera ray's
+    uint lobe_ray = slot / (g.size.x * g.size.y);
+    uint lobe = lobe_ray / pc.frame.y;
+    uint k = pc.frame.x * pc.frame.y + lobe_ray % pc.frame.y;
     if (!fed) {
         baked = rb_hybrid_baked(hit.extra, hit.bary, !front);
-        if ((pc.history.z & 2u) != 0u && max(sf.c_diff.r, max(sf.c_diff.g, sf.c_diff.b)) > 0.0) {
-            // the slot's (lobe, ray): its random numbers, rotated apart from the camera ray's
-            uint lobe_ray = slot / (g.size.x * g.size.y);
-            uint lobe = lobe_ray / pc.frame.y;
-            vec2 u = rb_hybrid_u(pc.frame.x * pc.frame.y + lobe_ray % pc.frame.y, px, lobe + 6u);
-            baked += secondary(p, n, ng, u);
-        }
+        if (bounces == 0xffffffffu && max(sf.c_diff.r, max(sf.c_diff.g, sf.c_diff.b)) > 0.0)
+            baked += secondary(p, n, ng, rb_hybrid_u(k, px, lobe + 6u));
     }
-    vec3 lit =
-        weight * rb_hybrid_shade(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90, sf.roughness, baked, fed);
+    vec3 lit = bounces == 0u ? vec3(0.0)
+                             : rb_hybrid_shade(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90,
+                                               sf.roughness, baked, fed);
+    if (bounces >= 2u && bounces != 0xffffffffu)
+        lit += rb_hybrid_chain(p, n, ng, -d, sf.c_diff, sf.f0, sf.f90, sf.roughness, bounces - 1u,
+                               k, px, lobe);
+    lit *= weight;
     slots[slot].a = vec4(direct, uintBitsToFloat(RB_HYBRID_BVH));
     slots[slot].b = vec4(lit, 0.0);
 }

@@ -125,7 +125,14 @@ void main()
         bool fed = rb_hybrid_feedback(pq.xyz, nq.xyz, aq.rgb, sq.rgb, baked);
         if (!fed)
             baked = rb_hybrid_baked_at(pq.xyz, ngq, pq.w, aq.w, nq.w < 0.0);
-        vec3 lit = rb_hybrid_shade(pq.xyz, nq.xyz, ngq, -l, aq.rgb, sq.rgb, eq.w, sq.a, baked, fed);
+        uint bounces = rb_hybrid_max_bounces();
+        vec3 lit = bounces == 0u ? vec3(0.0)
+                                 : rb_hybrid_shade(pq.xyz, nq.xyz, ngq, -l, aq.rgb, sq.rgb, eq.w,
+                                                   sq.a, baked, fed);
+        // A counted path (max_bounces N >= 2) goes on from the hit through the BVH.
+        if (bounces >= 2u && bounces != 0xffffffffu)
+            lit += rb_hybrid_chain(pq.xyz, nq.xyz, ngq, -l, aq.rgb, sq.rgb, eq.w, sq.a,
+                                   bounces - 1u, pc.frame.x * rays + r, px, lobe);
         // Emission found is weighed against the light sample of the same point (its triangle
         // from the G-buffer).
         vec3 found = vec3(0.0);

@@ -18,12 +18,17 @@
  * The environment has its light sample too, by the importance table of its map (the
  * reference's, env_init) or cosine-weighted without one, weighed against the rays that miss.
  *
- * Every bounce (integrator.hybrid.feedback). A hit reflects what the pixel that saw it in the
- * previous frame gathered, diffuse and specular, direct and indirect (rb_hybrid_feedback),
- * read from this frame's younger accumulator and never on the frame that starts it again; a hit
- * the previous frame did not see takes its baked light and one secondary diffuse ray through the
- * BVH. So each frame adds a bounce, and what an accumulator holds still depends only on the
- * frames since its start: the feedback keeps the history contract below.
+ * Bounces (integrator.hybrid.max_bounces). Unlimited, the default: a hit reflects what the
+ * pixel that saw it in the previous frame gathered, diffuse and specular, direct and indirect
+ * (rb_hybrid_feedback), read from this frame's younger accumulator and never on the frame that
+ * starts it again; a hit the previous frame did not see takes its baked light and one secondary
+ * diffuse ray through the BVH. So each frame adds a bounce, and what an accumulator holds still
+ * depends only on the frames since its start: the feedback keeps the history contract below.
+ * The feedback cannot stop at a count, so a count N, the reference's path space with its
+ * max_bounces N, is traced instead: a hit reflects its direct light (punctual and baked) and
+ * N - 1 further bounces, a chain of rays through the BVH weighed by the BRDFs, each hit lit the
+ * same way (rb_hybrid_chain); 1 is direct light alone, 0 nothing. No frame reads another's light
+ * then.
  *
  * History. Two accumulators take every sample; accumulator A starts again on the frames
  * sequence_start + kW, B on sequence_start + kW + W/2 (and both on sequence_start), W =
@@ -957,7 +962,7 @@ static void set_push(const struct rb_integrator *it, struct hybrid *d, int frame
     *p = (struct rb_gpu_hybrid_push){
         .frame = {(uint32_t)frame, s->rays, 0, (uint32_t)(d->h.slot_count / 2)},
         .history = {rel % w == 0, rel == 0 || (rel >= half && (rel - half) % w == 0),
-                    b_older | (s->feedback ? 2u : 0u), !b_older},
+                    b_older | (s->feedback ? 2u : s->max_bounces << 2), !b_older},
         .sizes = {s->spp, s->screen_steps, d->queue_capacity, d->h.hiz_levels},
         .more = {0, 0, 0, s->filter_radius_px},
         .params = {s->noise, s->thickness, s->filter_depth, s->filter_normal},

@@ -37,6 +37,7 @@ enum key_flags {
     KF_MIN_EXCL = 1 << 2,   /* value > min rather than >= min */
     KF_MAX_EXCL = 1 << 3,
     KF_NORMALIZE = 1 << 4, /* a direction: normalized on load, zero length is an error */
+    KF_UNLIMITED = 1 << 5, /* KT_UINT: the word "unlimited" stores UINT32_MAX */
 };
 
 struct ctx;
@@ -273,8 +274,12 @@ static const struct key keys[] = {
       "65536", 0, "hybrid: baked light points beyond three a side of each of the BVH's triangles"),
     K("integrator.hybrid.bake_samples", KT_UINT, JOB(integrator.hybrid.bake_samples), 0, 65536,
       "32", 0, "hybrid: light samples per baked point; 0: no bake"),
+    K("integrator.hybrid.max_bounces", KT_UINT, JOB(integrator.hybrid.max_bounces), 0, 8,
+      "unlimited", KF_UNLIMITED,
+      "hybrid: bounces after the first hit, as the reference counts them (0: direct light only); "
+      "unlimited: hits reflect the light their pixels gathered"),
     K("integrator.hybrid.feedback", KT_BOOL, JOB(integrator.hybrid.feedback), NOLO, NOHI, "true", 0,
-      "hybrid: hits also reflect the light their pixels gathered (every bounce); false: one"),
+      "hybrid: the older spelling of max_bounces: true is unlimited, false is 1"),
     K("integrator.hybrid.check_screen", KT_BOOL, JOB(integrator.hybrid.check_screen), NOLO, NOHI,
       "false", 0, "hybrid: also trace screen-space hits through the BVH and count agreement"),
     K("integrator.hybrid.queue_rays", KT_UINT, JOB(integrator.hybrid.queue_rays), 0, UINT32_MAX,
@@ -456,6 +461,8 @@ static void range_text(const struct key *k, char *buf, size_t size)
         snprintf(buf, size, "%s %s", le, b);
     else
         buf[0] = '\0';
+    if (k->flags & KF_UNLIMITED)
+        snprintf(buf + strlen(buf), size - strlen(buf), " or unlimited");
 }
 
 static bool in_range(const struct key *k, double v)
@@ -806,8 +813,14 @@ static enum rb_status set_key(struct ctx *c, const struct key *k, yaml_node_t *n
     case KT_INT:
     case KT_UINT: {
         long l;
+        const char *word = scalar(node);
+        if ((k->flags & KF_UNLIMITED) && word && !strcmp(word, "unlimited")) {
+            *(uint32_t *)field(base, k) = UINT32_MAX;
+            break;
+        }
         if (!parse_long(node, &l))
-            return fail(c, &at, RB_E_PARSE, "'%s' expects an integer", shown);
+            return fail(c, &at, RB_E_PARSE, "'%s' expects an integer%s", shown,
+                        (k->flags & KF_UNLIMITED) ? " or unlimited" : "");
         if (l < INT_MIN || l > (k->type == KT_INT ? (long)INT_MAX : (long)UINT32_MAX))
             return fail(c, &at, RB_E_INVALID, "'%s' is out of range", shown);
         if ((st = check_range(c, k, shown, &at, (double)l)))
@@ -1261,6 +1274,12 @@ static enum rb_status validate(struct ctx *c)
                         "layer 'variance' needs at least 2 samples a pixel, and "
                         "'integrator.reference.spp' is 1");
     }
+    /* feedback is max_bounces's older spelling: whichever of the two was set last counts. */
+    struct rb_job_hybrid *hy = &job->integrator.hybrid;
+    if (m[key_index("integrator.hybrid.feedback")].seq >
+        m[key_index("integrator.hybrid.max_bounces")].seq)
+        hy->max_bounces = hy->feedback ? UINT32_MAX : 1;
+    hy->feedback = hy->max_bounces == UINT32_MAX;
     struct rb_err why = RB_ERR_INIT;
     if (rb_job_check_output(job->output, job->frame_start, job->frame_end, &why))
         return fail(c, mark_of(m, "output", NULL, &c->root), RB_E_INVALID, "%s", why.msg);
@@ -1468,6 +1487,9 @@ void rb_job_rehash(struct rb_job *job)
         h = h_f32(h, y->filter_depth);
         h = h_f32(h, y->filter_normal);
         h = h_u32(h, y->feedback);
+        /* a count feedback does not already say (it says unlimited and 1) */
+        if (y->max_bounces != UINT32_MAX && y->max_bounces != 1)
+            h = h_u32(h, y->max_bounces);
     }
     job->hash = h;
 }

@@ -199,7 +199,8 @@ struct rb_job {
             uint32_t bake_texels;      /* baked light points past the vertices, 65536 */
             uint32_t bake_samples;     /* light samples a baked point, default 32; 0: none */
             bool check_screen;         /* screen hits traced again through the BVH */
-            bool feedback;             /* hits reflect what their pixels gathered, default true */
+            uint32_t max_bounces;      /* past the first hit; UINT32_MAX (default): unlimited */
+            bool feedback;             /* max_bounces is UINT32_MAX (the older key's spelling) */
             uint32_t queue_rays;       /* BVH queue capacity; 0: every ray of a frame */
             uint32_t filter_radius_px; /* the filter's radius at one sample, default 6 */
             float filter_depth;        /* relative depth difference that stops it, 0.05 */

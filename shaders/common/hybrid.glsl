@@ -499,7 +499,7 @@ ivec2 rb_hybrid_reproject(ivec2 px, float depth, vec3 n)
 // the depth and normal tests), where the pixel has no diffuse samples yet, where that accumulator
 // starts again this frame (so that what an accumulator holds depends on the frames since its
 // start alone: the history contract of lib/integrators/hybrid.c), and with
-// integrator.hybrid.feedback off.
+// integrator.hybrid.max_bounces a count.
 bool rb_hybrid_feedback(vec3 p, vec3 n, vec3 c_diff, vec3 f0, out vec3 light)
 {
     light = vec3(0.0);
@@ -528,6 +528,83 @@ bool rb_hybrid_feedback(vec3 p, vec3 n, vec3 c_diff, vec3 f0, out vec3 light)
     if (sd.w > 0.0)
         light += rb_spec_map(f0) * (sd.rgb + si.rgb) / sd.w;
     return true;
+}
+
+// A BVH hit's surface: position, shading and geometric normals on the side the ray d arrives
+// from (front: whether that is the triangle's front), and its material.
+void rb_hybrid_bvh_surface(vec3 o, vec3 d, rb_bvh_hit hit, out vec3 p, out vec3 n, out vec3 ng,
+                           out bool front, out rb_surface sf)
+{
+    uint t = hit.triangle;
+    rb_gpu_vertex v0 = verts[indices[3u * t]], v1 = verts[indices[3u * t + 1u]],
+                  v2 = verts[indices[3u * t + 2u]];
+    vec3 b = vec3(1.0 - hit.bary.x - hit.bary.y, hit.bary);
+    ng = normalize(cross(v1.position.xyz - v0.position.xyz, v2.position.xyz - v0.position.xyz));
+    n = normalize(b.x * v0.normal.xyz + b.y * v1.normal.xyz + b.z * v2.normal.xyz);
+    vec2 uv = b.x * v0.uv.xy + b.y * v1.uv.xy + b.z * v2.uv.xy;
+    rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
+    front = dot(ng, d) < 0.0;
+    if (!front)
+        ng = -ng;
+    if (dot(n, ng) < 0.0)
+        n = -n;
+    if (m.textures.z >= 0) {
+        vec4 tangent = b.x * v0.tangent + b.y * v1.tangent + b.z * v2.tangent;
+        vec3 tn = textureLod(linear_textures, vec3(uv, float(m.textures.z)), 0.0).xyz;
+        n = rb_normal_map(n, tangent, tn * 2.0 - 1.0, m.emissive.w);
+    }
+    sf = rb_material_eval(m, uv, srgb_textures, linear_textures);
+    p = o + hit.t * d;
+}
+
+// Bounces past a hit (integrator.hybrid.max_bounces, as the reference counts them after the
+// first surface hit): UINT_MAX for unlimited (rb_hybrid_feedback), else the count.
+uint rb_hybrid_max_bounces()
+{
+    return (pc.history.z & 2u) != 0u ? 0xffffffffu : pc.history.z >> 2u;
+}
+
+// A counted path's further bounces from a hit (p, shading normal n, geometric normal ng, on the
+// side the ray arrived from; v toward where the ray came from; its material): `count`
+// cosine-weighted rays through the BVH, one from each hit the last one found, each hit lit as a
+// hit of one bounce is (the punctual lights' shadow-mapped light and its baked light through its
+// diffuse albedo), what each brings weighed by the BRDFs (both lobes) before it. The light the
+// path sends from p toward v, but emission (the emitters' and the environment's light at each
+// vertex is its bake's). Random numbers: sample k of the pixel's R2 sequence, a rotation of its
+// own a bounce (the first one's is the hidden hit's secondary ray's, 6 + lobe).
+vec3 rb_hybrid_chain(vec3 p, vec3 n, vec3 ng, vec3 v, vec3 c_diff, vec3 f0, float f90,
+                     float roughness, uint count, uint k, ivec2 px, uint lobe)
+{
+    vec3 sum = vec3(0.0), beta = vec3(1.0);
+    for (uint j = 0u; j < count; j++) {
+        vec2 u = rb_hybrid_u(k, px, (j == 0u ? 6u : 8u + 2u * j) + lobe);
+        vec3 t, b;
+        rb_basis(n, t, b);
+        float r = sqrt(u.x), phi = 2.0 * RB_PI * u.y;
+        vec3 l = normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(1.0 - u.x, 0.0)) * n);
+        if (dot(ng, l) <= 0.0)
+            break;
+        // BRDF x cosine over the cosine-weighted pdf
+        beta *= RB_PI * rb_brdf(n, v, l, c_diff, f0, f90, roughness);
+        if (!(max(beta.r, max(beta.g, beta.b)) > 0.0))
+            break;
+        vec3 o = p + ng * (1e-4 * length(p - g.camera_pos.xyz) + 1e-6 * pc.scene.x);
+        rb_bvh_hit hit;
+        if (!rb_bvh_intersect(o, l, 0.0, 1e30, hit))
+            break;
+        bool front;
+        rb_surface sf;
+        rb_hybrid_bvh_surface(o, l, hit, p, n, ng, front, sf);
+        vec3 baked = rb_hybrid_baked(hit.extra, hit.bary, !front);
+        sum += beta * rb_hybrid_shade(p, n, ng, -l, sf.c_diff, sf.f0, sf.f90, sf.roughness, baked,
+                                      false);
+        v = -l;
+        c_diff = sf.c_diff;
+        f0 = sf.f0;
+        f90 = sf.f90;
+        roughness = sf.roughness;
+    }
+    return sum;
 }
 
 // The tile mask at a pixel, smoothed by a cubic B-spline across tiles (seed 003: "bicubic tile

@@ -85,7 +85,8 @@ struct rb_gpu_hybrid_counters {
 struct rb_gpu_hybrid_push {
     RB_UVEC4(frame);   /* frame index, rays a lobe, lobe of this dispatch, slots per lobe */
     RB_UVEC4(history); /* reset A, reset B (0/1), output set (0: A, 1: B) | 2 with feedback
-                        * (rb_hybrid_feedback), younger set */
+                        * (max_bounces unlimited, rb_hybrid_feedback) | max_bounces << 2
+                        * otherwise (rb_hybrid_max_bounces), younger set */
     RB_UVEC4(sizes);   /* spp aimed for, screen steps, queue capacity, hiz levels */
     RB_UVEC4(level);   /* hiz: level written, its width, height, offset; queue: phase */
     RB_UVEC4(more);    /* hiz: offset of the level read, its width, height; light_rays: x, the

@@ -762,6 +762,52 @@ static void test_adaptive_layers(void **state)
         "you mean 'indirect_diffuse'?");
 }
 
+/* integrator.hybrid.max_bounces: a count from 0 to 8 or the word unlimited (the default, the
+ * hits' feedback); feedback is its older spelling, and whichever of the two was set last counts. */
+static void test_hybrid_max_bounces(void **state)
+{
+    (void)state;
+    struct rb_job *job = must_parse("scene: empty.gltf\nintegrator: {name: hybrid}\n", NULL, 0);
+    assert_int_equal(job->integrator.hybrid.max_bounces, UINT32_MAX);
+    assert_true(job->integrator.hybrid.feedback);
+    uint64_t unlimited_hash = job->hash;
+    rb_job_destroy(job);
+    job = must_parse("scene: empty.gltf\nintegrator: {name: hybrid, hybrid: {max_bounces: 2}}\n",
+                     NULL, 0);
+    assert_int_equal(job->integrator.hybrid.max_bounces, 2);
+    assert_false(job->integrator.hybrid.feedback);
+    uint64_t two_hash = job->hash;
+    rb_job_destroy(job);
+    assert_true(two_hash != unlimited_hash);
+    job = must_parse("scene: empty.gltf\nintegrator: {name: hybrid, hybrid: {feedback: false}}\n",
+                     NULL, 0);
+    assert_int_equal(job->integrator.hybrid.max_bounces, 1);
+    uint64_t off_hash = job->hash;
+    rb_job_destroy(job);
+    job = must_parse("scene: empty.gltf\nintegrator: {name: hybrid, hybrid: {max_bounces: 1}}\n",
+                     NULL, 0);
+    assert_int_equal(job->hash, off_hash);
+    rb_job_destroy(job);
+    struct rb_job_override later[] = {{"integrator.hybrid.max_bounces", "unlimited", NULL}};
+    job = must_parse("scene: empty.gltf\nintegrator: {name: hybrid, hybrid: {feedback: false}}\n",
+                     later, 1);
+    assert_int_equal(job->integrator.hybrid.max_bounces, UINT32_MAX);
+    assert_true(job->integrator.hybrid.feedback);
+    rb_job_destroy(job);
+    struct rb_job_override off[] = {{"integrator.hybrid.feedback", "false", NULL}};
+    job = must_parse("scene: empty.gltf\nintegrator: {name: hybrid, hybrid: {max_bounces: 3}}\n",
+                     off, 1);
+    assert_int_equal(job->integrator.hybrid.max_bounces, 1);
+    rb_job_destroy(job);
+    expect_error("scene: empty.gltf\nintegrator:\n  hybrid: {max_bounces: 9}\n", NULL, 0,
+                 RB_E_INVALID,
+                 "job.yaml:3:25: 'integrator.hybrid.max_bounces' must be between 0 and 8 or "
+                 "unlimited");
+    expect_error("scene: empty.gltf\nintegrator:\n  hybrid: {max_bounces: all}\n", NULL, 0,
+                 RB_E_PARSE,
+                 "job.yaml:3:25: 'integrator.hybrid.max_bounces' expects an integer or unlimited");
+}
+
 static void test_man_page_covers_keys(void **state)
 {
     (void)state;
@@ -799,6 +845,7 @@ int main(void)
         cmocka_unit_test(test_integrator_names),
         cmocka_unit_test(test_key_table),
         cmocka_unit_test(test_adaptive_layers),
+        cmocka_unit_test(test_hybrid_max_bounces),
         cmocka_unit_test(test_man_page_covers_keys),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
