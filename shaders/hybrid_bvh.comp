@@ -13,6 +13,7 @@
 // them; only double-sided materials have their back's light baked.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 
 layout(local_size_x = 64) in;
 
@@ -24,8 +25,8 @@ void surface(vec3 o, vec3 d, rb_bvh_hit hit, out vec3 p, out vec3 n, out vec3 ng
              out rb_surface sf)
 {
     uint t = hit.triangle;
-    rb_gpu_vertex v0 = verts[indices[3u * t]], v1 = verts[indices[3u * t + 1u]],
-                  v2 = verts[indices[3u * t + 2u]];
+    rb_gpu_vertex v0 = vertex_at(index_at(3u * t)), v1 = vertex_at(index_at(3u * t + 1u)),
+                  v2 = vertex_at(index_at(3u * t + 2u));
     vec3 b = vec3(1.0 - hit.bary.x - hit.bary.y, hit.bary);
     ng = normalize(cross(v1.position.xyz - v0.position.xyz, v2.position.xyz - v0.position.xyz));
     n = normalize(b.x * v0.normal.xyz + b.y * v1.normal.xyz + b.z * v2.normal.xyz);

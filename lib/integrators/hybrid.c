@@ -174,9 +174,9 @@ static void destroy(struct rb_integrator *it, void *state)
     rb_bvh_release(&w->bvh);
     struct rb_gpu *gpu = it->gpu;
     struct rb_hybrid_frame *h = &d->h;
-    struct rb_gpu_buffer *bufs[] = {&h->hiz,      &h->slots,  &h->counters,
-                                    &h->queue,    &h->blocks, &h->bvh_nodes,
-                                    &h->bvh_tris, &h->tiles,  &h->indices};
+    struct rb_gpu_buffer *bufs[] = {&h->hiz,     &h->slots,     &h->counters, &h->queue,
+                                    &h->blocks,  &h->bvh_nodes, &h->bvh_tris, &h->tiles,
+                                    &h->indices, &h->table};
     for (size_t i = 0; i < COUNT(bufs); i++)
         rb_gpu_buffer_release(gpu, bufs[i]);
     for (uint32_t i = 0; i < 2; i++)
@@ -323,7 +323,9 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
     /* a node holds both children: no more nodes than leaves, so than triangles (a root at
      * least) */
     d->node_capacity = d->tri_capacity;
-    /* Every buffer is bound whole: each within maxStorageBufferRange, or a clear error. */
+    /* Every buffer is bound whole: each within maxStorageBufferRange, or a clear error; but the
+     * last, which grows with the scene's triangles, is read by address (geometry_shared.h) and
+     * needs only to be one buffer. */
     const struct {
         const char *name;
         uint64_t bytes;
@@ -343,7 +345,8 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
     enum rb_status st;
     for (size_t i = 0; i < COUNT(bound); i++)
         if ((st = rb_gpu_check_buffer_size(gpu, "hybrid", bound[i].name, bound[i].bytes, err)) ||
-            (st = rb_gpu_check_storage_range(gpu, "hybrid", bound[i].name, bound[i].bytes, err)))
+            (i + 1 < COUNT(bound) &&
+             (st = rb_gpu_check_storage_range(gpu, "hybrid", bound[i].name, bound[i].bytes, err))))
             return st;
     if ((st = rb_frame_buffer(gpu, bound[0].bytes, storage, false, "hybrid.hiz", &h->hiz, err)) ||
         (st = rb_frame_buffer(gpu, bound[1].bytes, storage, false, "hybrid.slots", &h->slots,
@@ -361,9 +364,20 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
                               err)) ||
         (st = rb_frame_buffer(gpu, bound[6].bytes, storage, false, "hybrid.tiles", &h->tiles,
                               err)) ||
-        (st = rb_frame_buffer(gpu, bound[7].bytes ? bound[7].bytes : 4, storage, true,
-                              "hybrid.indices", &h->indices, err)))
+        (st = rb_gpu_buffer_init(
+             gpu,
+             &(struct rb_gpu_buffer_desc){.size_bytes = bound[7].bytes ? bound[7].bytes : 4,
+                                          .usage = storage,
+                                          .is_host_visible = true,
+                                          .is_addressed = true,
+                                          .debug_name = "hybrid.indices"},
+             &h->indices, err)) ||
+        (st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_geometry),
+                              VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "hybrid.table", &h->table,
+                              err)))
         return st;
+    memcpy(h->table.mapped, &(struct rb_gpu_geometry){.indices = h->indices.address},
+           sizeof(struct rb_gpu_geometry));
     memcpy(h->indices.mapped, d->indices, all_triangles(d) * 3 * sizeof(uint32_t));
     memcpy((uint32_t *)h->indices.mapped + all_triangles(d) * 3, d->emitters,
            (size_t)d->emitter_count * sizeof(uint32_t));

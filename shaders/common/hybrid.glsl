@@ -9,6 +9,7 @@
 #include "bdpt_shared.h"
 #include "hybrid_shared.h"
 #include "bvh_shared.h"
+#include "geometry_shared.h"
 #include "brdf.glsl"
 #include "encode.glsl"
 #include "lights.glsl"
@@ -37,8 +38,11 @@ layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer BvhTris { rb_g
 // no binding to spare for them).
 layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer Bake { vec4 bake[]; };
 layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer BakeWords { uint bake_words[]; };
-layout(std430, binding = RB_BIND_HYBRID_VERTICES) readonly buffer Verts { rb_gpu_vertex verts[]; };
-layout(std430, binding = RB_BIND_HYBRID_INDICES) readonly buffer Indices { uint indices[]; };
+// The world vertices, and the triangles' indices followed by the emitter and sky tables, by
+// their device addresses (geometry_shared.h: no binding's range bounds them): vertex_at and
+// index_at below.
+layout(std140, binding = RB_BIND_HYBRID_VERTICES) uniform Geometry { rb_gpu_geometry geo; };
+layout(std140, binding = RB_BIND_HYBRID_INDICES) uniform Table { rb_gpu_geometry table; };
 layout(std430, binding = RB_BIND_HYBRID_MATERIALS) readonly buffer Materials { rb_gpu_material materials[]; };
 layout(binding = RB_BIND_HYBRID_SRGB_TEXTURES) uniform sampler2DArray srgb_textures;
 layout(binding = RB_BIND_HYBRID_LINEAR_TEXTURES) uniform sampler2DArray linear_textures;
@@ -53,6 +57,16 @@ layout(binding = RB_BIND_HYBRID_LIGHT + RB_BDPT_INDIRECT_SPECULAR, rgba32f) unif
 
 layout(push_constant) uniform Push { rb_gpu_hybrid_push pc; };
 
+rb_gpu_vertex vertex_at(uint i)
+{
+    return geo.vertices.v[i];
+}
+
+uint index_at(uint i)
+{
+    return table.indices.u[i];
+}
+
 #include "shadow.glsl"
 #include "punctual.glsl"
 
@@ -61,7 +75,7 @@ layout(push_constant) uniform Push { rb_gpu_hybrid_push pc; };
 // which are no occluders (the transparency pass draws them over the frame).
 bool rb_hybrid_bvh_filter(uint t, vec2 bary)
 {
-    rb_gpu_vertex v0 = verts[indices[3u * t]];
+    rb_gpu_vertex v0 = vertex_at(index_at(3u * t));
     rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
     if (m.params.z < 0.0)
         return false;
@@ -69,8 +83,8 @@ bool rb_hybrid_bvh_filter(uint t, vec2 bary)
         return true;
     float a = m.base_color.a;
     if (m.textures.x >= 0) {
-        vec2 uv = (1.0 - bary.x - bary.y) * v0.uv.xy + bary.x * verts[indices[3u * t + 1u]].uv.xy +
-                  bary.y * verts[indices[3u * t + 2u]].uv.xy;
+        vec2 uv = (1.0 - bary.x - bary.y) * v0.uv.xy + bary.x * vertex_at(index_at(3u * t + 1u)).uv.xy +
+                  bary.y * vertex_at(index_at(3u * t + 2u)).uv.xy;
         a *= textureLod(srgb_textures, vec3(uv, float(m.textures.x)), 0.0).a;
     }
     return a >= m.params.z;
@@ -271,7 +285,7 @@ float rb_hybrid_light_pdf(rb_gpu_material m, float dist, float cos_l)
 // The environment's light samples (DESIGN.md "hybrid", rays), as the reference takes them
 // (lib/reference/lights.c): with a map, by the importance table of its texels (each the largest
 // luminance of its 3 x 3 neighbourhood times sin(theta)), which lib/integrators/hybrid.c writes
-// into `indices` after the emitter list: the marginal CDF over rows (h + 1), each row's CDF
+// into the index table (index_at) after the emitter list: the marginal CDF over rows (h + 1), each row's CDF
 // (w + 1 a row), then each texel's probability (w h), as float bits; without a map, cosine-
 // weighted around the shading normal. None when the environment is black (rb_hybrid_env_lit).
 bool rb_hybrid_env_lit()
@@ -287,7 +301,7 @@ uint rb_hybrid_env_table()
 
 float rb_hybrid_table(uint i)
 {
-    return uintBitsToFloat(indices[i]);
+    return uintBitsToFloat(index_at(i));
 }
 
 // The reference's search: the last i in [0, n) with cdf[i] <= u, skipping empty intervals.
@@ -367,10 +381,10 @@ float rb_hybrid_emit_weight(uint t, vec3 l, float dist, float pdf_brdf)
 {
     if (pc.bake.w == 0u)
         return 1.0;
-    rb_gpu_vertex v0 = verts[indices[3u * t]];
+    rb_gpu_vertex v0 = vertex_at(index_at(3u * t));
     rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
-    vec3 ne = cross(verts[indices[3u * t + 1u]].position.xyz - v0.position.xyz,
-                    verts[indices[3u * t + 2u]].position.xyz - v0.position.xyz);
+    vec3 ne = cross(vertex_at(index_at(3u * t + 1u)).position.xyz - v0.position.xyz,
+                    vertex_at(index_at(3u * t + 2u)).position.xyz - v0.position.xyz);
     float len = length(ne);
     float cos_l = len > 0.0 ? abs(dot(ne / len, l)) : 0.0;
     return rb_hybrid_mis(pdf_brdf, rb_hybrid_light_pdf(m, dist, cos_l));
@@ -449,8 +463,8 @@ vec3 rb_hybrid_baked_at(vec3 p, vec3 ng, float depth, float tri, bool back)
     uint word = bake_words[pc.bake.z + t];
     if (word == 0u)
         return vec3(0.0);
-    vec3 p0 = verts[indices[3u * t]].position.xyz, p1 = verts[indices[3u * t + 1u]].position.xyz,
-         p2 = verts[indices[3u * t + 2u]].position.xyz;
+    vec3 p0 = vertex_at(index_at(3u * t)).position.xyz, p1 = vertex_at(index_at(3u * t + 1u)).position.xyz,
+         p2 = vertex_at(index_at(3u * t + 2u)).position.xyz;
     // Barycentrics of p's projection into the triangle's plane.
     vec3 e1 = p1 - p0, e2 = p2 - p0, q = p - p0;
     float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2);
