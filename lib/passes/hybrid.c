@@ -131,7 +131,7 @@ static void bind(struct rb_pass *pass, VkCommandBuffer cmd, const struct rb_fram
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_QUEUE, &h->queue);
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_BLOCKS, &h->blocks);
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_BVH_NODES, &h->bvh_nodes);
-    rb_pass_bind_buffer(&b, RB_BIND_HYBRID_BVH_TRIS, &h->bvh_tris);
+    rb_pass_bind_buffer_range(&b, RB_BIND_HYBRID_BVH_TRIS, &h->bvh_tris, 0, h->bvh_tri_bytes);
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_VERTICES, &slot->geometry);
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_INDICES, &h->table);
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_MATERIALS, &frame->materials);

@@ -24,6 +24,10 @@ layout(buffer_reference, std430, buffer_reference_align = 4) buffer rb_uint_arra
 {
     uint u[];
 };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer rb_vec4_array
+{
+    vec4 v[];
+};
 #define RB_ADDRESS(type, n) type n
 #else
 #define RB_ADDRESS(type, n) uint64_t n
@@ -35,6 +39,16 @@ struct rb_gpu_geometry {
     RB_ADDRESS(rb_float_array, src_vertices); /* struct rb_scene_vertex, RB_SRC_VERTEX_FLOATS */
     RB_ADDRESS(rb_float_array, morph_deltas); /* struct rb_scene_morph_delta, as floats */
     RB_ADDRESS(rb_uint_array, indices);       /* uint32, into vertices: the frame's draw */
+};
+
+/* The hybrid integrator's own arrays that grow with the scene (std140, a uniform buffer):
+ * bake and bake_words are its BVH buffer (RB_BIND_HYBRID_BVH_TRIS, bound only as far as its
+ * triangles) whole, as vec4s and as words, for the baked points and words after the triangles. */
+struct rb_gpu_hybrid_table {
+    RB_ADDRESS(rb_uint_array, indices);    /* the triangles' indices, the emitters, the sky */
+    RB_ADDRESS(rb_vec4_array, bake);       /* the BVH buffer as vec4s */
+    RB_ADDRESS(rb_uint_array, bake_words); /* the BVH buffer as words */
+    RB_ADDRESS(rb_uint_array, unused);     /* 0 */
 };
 
 #endif

@@ -33,16 +33,14 @@ layout(std430, binding = RB_BIND_HYBRID_COUNTERS) buffer Counters { rb_gpu_hybri
 layout(std430, binding = RB_BIND_HYBRID_QUEUE) buffer Queue { uint queue[]; };
 layout(std430, binding = RB_BIND_HYBRID_BLOCKS) buffer Blocks { uint blocks[]; };
 layout(std430, binding = RB_BIND_HYBRID_BVH_NODES) readonly buffer BvhNodes { rb_gpu_bvh_node bvh_nodes[]; };
+// Bound as far as the BVH's triangles; the baked points and words that follow them, which grow
+// with the scene's triangles, are read by the buffer's address (table.bake, table.bake_words).
 layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer BvhTris { rb_gpu_bvh_triangle bvh_tris[]; };
-// The same buffer as vec4s: the baked points follow the triangles (the push descriptor set has
-// no binding to spare for them).
-layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer Bake { vec4 bake[]; };
-layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer BakeWords { uint bake_words[]; };
-// The world vertices, and the triangles' indices followed by the emitter and sky tables, by
-// their device addresses (geometry_shared.h: no binding's range bounds them): vertex_at and
-// index_at below.
+// The world vertices, the triangles' indices followed by the emitter and sky tables, and the
+// bake, by their device addresses (geometry_shared.h: no binding's range bounds them):
+// vertex_at, index_at, baked_point and bake_word below.
 layout(std140, binding = RB_BIND_HYBRID_VERTICES) uniform Geometry { rb_gpu_geometry geo; };
-layout(std140, binding = RB_BIND_HYBRID_INDICES) uniform Table { rb_gpu_geometry table; };
+layout(std140, binding = RB_BIND_HYBRID_INDICES) uniform Table { rb_gpu_hybrid_table table; };
 layout(std430, binding = RB_BIND_HYBRID_MATERIALS) readonly buffer Materials { rb_gpu_material materials[]; };
 layout(binding = RB_BIND_HYBRID_SRGB_TEXTURES) uniform sampler2DArray srgb_textures;
 layout(binding = RB_BIND_HYBRID_LINEAR_TEXTURES) uniform sampler2DArray linear_textures;
@@ -65,6 +63,16 @@ rb_gpu_vertex vertex_at(uint i)
 uint index_at(uint i)
 {
     return table.indices.u[i];
+}
+
+vec4 baked_point(uint i)
+{
+    return table.bake.v[i];
+}
+
+uint bake_word(uint i)
+{
+    return table.bake_words.u[i];
 }
 
 #include "shadow.glsl"
@@ -431,13 +439,13 @@ vec3 rb_hybrid_baked(uint word, vec2 bary, bool back)
     if (f.x + f.y <= 1.0 || i0.x + i0.y + 2u > r) {
         vec3 w = max(vec3(1.0 - f.x - f.y, f.x, f.y), vec3(0.0));
         w /= max(w.x + w.y + w.z, 1e-6);
-        return w.x * bake[rb_bake_point(base, r, i0.x, i0.y)].rgb +
-               w.y * bake[rb_bake_point(base, r, i0.x + 1u, i0.y)].rgb +
-               w.z * bake[rb_bake_point(base, r, i0.x, i0.y + 1u)].rgb;
+        return w.x * baked_point(rb_bake_point(base, r, i0.x, i0.y)).rgb +
+               w.y * baked_point(rb_bake_point(base, r, i0.x + 1u, i0.y)).rgb +
+               w.z * baked_point(rb_bake_point(base, r, i0.x, i0.y + 1u)).rgb;
     }
-    return (f.x + f.y - 1.0) * bake[rb_bake_point(base, r, i0.x + 1u, i0.y + 1u)].rgb +
-           (1.0 - f.x) * bake[rb_bake_point(base, r, i0.x, i0.y + 1u)].rgb +
-           (1.0 - f.y) * bake[rb_bake_point(base, r, i0.x + 1u, i0.y)].rgb;
+    return (f.x + f.y - 1.0) * baked_point(rb_bake_point(base, r, i0.x + 1u, i0.y + 1u)).rgb +
+           (1.0 - f.x) * baked_point(rb_bake_point(base, r, i0.x, i0.y + 1u)).rgb +
+           (1.0 - f.y) * baked_point(rb_bake_point(base, r, i0.x + 1u, i0.y)).rgb;
 }
 
 // The baked light at a surface point the camera sees (a screen hit): p is the G-buffer's point,
@@ -460,7 +468,7 @@ vec3 rb_hybrid_baked_at(vec3 p, vec3 ng, float depth, float tri, bool back)
         return rb_hybrid_baked(hit.extra, hit.bary, back);
     }
     uint t = uint(tri);
-    uint word = bake_words[pc.bake.z + t];
+    uint word = bake_word(pc.bake.z + t);
     if (word == 0u)
         return vec3(0.0);
     vec3 p0 = vertex_at(index_at(3u * t)).position.xyz, p1 = vertex_at(index_at(3u * t + 1u)).position.xyz,

@@ -30,6 +30,15 @@ for integrator in direct bdpt hybrid; do
     expect_exit 0 "$integrator renders the 1.7 M vertices"
     tap_run "$BUILD/tests/tools/exrstat" "$T/$integrator/frame.0000.exr" R 0.05
 done
+# Under a sky, hybrid bakes its light into points (16 bytes each: three a side of every triangle
+# and bake_texels more) that follow the BVH's triangles in one buffer; with 5 M more they pass
+# one binding's range too (163 MB), and are read by address.
+sed 's/^environment: .*/environment: {color: [0.3, 0.4, 0.5]}/' "$job" >"$T/big/sky.yaml"
+rb render "$T/big/sky.yaml" --integrator hybrid --out "$T/sky" -q --set integrator.hybrid.history=2 \
+    --set integrator.hybrid.bake_samples=1 --set integrator.hybrid.bake_texels=5000000
+expect_exit 0 "hybrid bakes a sky's light into 8.4 M points"
+tap_run "$BUILD/tests/tools/exrstat" "$T/sky/frame.0000.exr" R 0.05
+
 rb reference "$job" --spp 4 --set integrator.reference.paths=direct --out "$T/refdirect" -q
 expect_exit 0 "the reference renders its direct path space"
 rb reference "$job" --spp 64 --out "$T/ref" -q
