@@ -9,7 +9,7 @@
 #
 #   BUILD=build sh tests/bench-scale.sh
 #
-# RB_BENCH_10M=1 adds 10 M triangles (about 80 s and 3.2 GB at most on two cores).
+# RB_BENCH_10M=1 adds 10 M triangles (about 70 s, and 3.2 GiB at most, on two cores).
 # RB_BENCH_QUICK=1: 10,000 triangles (100,000 for the 10 M row), so that a test can check that
 # every line is printed; its figures mean nothing.
 set -eu
