@@ -5,13 +5,15 @@
 // running sums: the same order every frame, so the same bits.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 #include "bindings_shared.h"
 #include "shared.h"
 #include "bdpt_shared.h"
+#include "geometry_shared.h"
 
 layout(local_size_x = 256) in;
 
-layout(std430, binding = RB_BIND_BDPT_EMITTERS_VERTICES) readonly buffer Vertices { rb_gpu_vertex vertices[]; };
+layout(std140, binding = RB_BIND_BDPT_EMITTERS_VERTICES) uniform Geometry { rb_gpu_geometry geo; };
 layout(std430, binding = RB_BIND_BDPT_EMITTERS_EMITTERS) readonly buffer Emitters { rb_gpu_bdpt_emitter emitters[]; };
 layout(std430, binding = RB_BIND_BDPT_EMITTERS_MATERIALS) readonly buffer Materials { rb_gpu_material materials[]; };
 layout(std430, binding = RB_BIND_BDPT_EMITTERS_CDF) writeonly buffer Cdf { float cdf[]; };

@@ -6,10 +6,12 @@
 // along a bundle ray is in its list.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 #include "bindings_shared.h"
 #include "shared.h"
 #include "view_shared.h"
 #include "bdpt_shared.h"
+#include "geometry_shared.h"
 #include "brdf.glsl"
 #include "lights.glsl"
 #include "material.glsl"
@@ -33,7 +35,7 @@ layout(binding = RB_BIND_BDPT_GENERATE_RSM_MATERIAL, rg32ui) uniform readonly ui
 layout(std430, binding = RB_BIND_BDPT_GENERATE_VPLS) writeonly buffer Vpls { rb_gpu_vpl vpls[]; };
 layout(std430, binding = RB_BIND_BDPT_GENERATE_VPL_VIEWS) writeonly buffer VplViews { rb_gpu_view vpl_views[]; };
 layout(std430, binding = RB_BIND_BDPT_GENERATE_BUNDLE_VIEWS) writeonly buffer BundleViews { rb_gpu_view bundle_views[]; };
-layout(std430, binding = RB_BIND_BDPT_GENERATE_VERTICES) readonly buffer Vertices { rb_gpu_vertex vertices[]; };
+layout(std140, binding = RB_BIND_BDPT_GENERATE_VERTICES) uniform Geometry { rb_gpu_geometry geo; };
 layout(std430, binding = RB_BIND_BDPT_GENERATE_EMITTERS) readonly buffer Emitters { rb_gpu_bdpt_emitter emitters[]; };
 layout(std430, binding = RB_BIND_BDPT_GENERATE_MATERIALS) readonly buffer Materials { rb_gpu_material materials[]; };
 layout(binding = RB_BIND_BDPT_GENERATE_SRGB_TEXTURES) uniform sampler2DArray srgb_textures;
@@ -124,7 +126,7 @@ rb_gpu_vpl emitter_vpl(vec3 u, float p_e, float sum)
     float su = sqrt(u.y), b1 = su * (1.0 - u.z), b2 = su * u.z, b0 = 1.0 - b1 - b2;
     uvec4 t = emitters[e].tri;
     vec3 n = normalize(cross(p1 - p0, p2 - p0)) * (rest < 0.5 ? 1.0 : -1.0);
-    vec2 uv = b0 * vertices[t.x].uv.xy + b1 * vertices[t.y].uv.xy + b2 * vertices[t.z].uv.xy;
+    vec2 uv = b0 * geo.vertices.v[t.x].uv.xy + b1 * geo.vertices.v[t.y].uv.xy + b2 * geo.vertices.v[t.z].uv.xy;
     rb_surface m = rb_material_eval(materials[t.w], uv, srgb_textures, linear_textures);
     float lum = luminance(materials[t.w].emissive.rgb);
     float pdf = p_e * lum / (2.0 * sum);

@@ -6,6 +6,7 @@
 // spans at least W / 2 of them. Writes the frame's geometry for the next frame's tests.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 
 layout(local_size_x = 8, local_size_y = 8) in;
 

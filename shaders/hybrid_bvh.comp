@@ -15,6 +15,7 @@
 // them; only double-sided materials have their back's light baked.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 
 layout(local_size_x = 64) in;
 

@@ -5,6 +5,7 @@
 // invocation writes its run's running sums: the same order every frame, so the same bits.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 
 layout(local_size_x = 256) in;
 
@@ -15,9 +16,9 @@ shared float partial[256];
 // Emitter e's area times the luminance of its emissive factor.
 float emitter_power(uint e)
 {
-    uint t = indices[floatBitsToUint(pc.scene.z) + e];
-    rb_gpu_vertex v0 = verts[indices[3u * t]];
-    vec3 p1 = verts[indices[3u * t + 1u]].position.xyz, p2 = verts[indices[3u * t + 2u]].position.xyz;
+    uint t = index_at(floatBitsToUint(pc.scene.z) + e);
+    rb_gpu_vertex v0 = vertex_at(index_at(3u * t));
+    vec3 p1 = vertex_at(index_at(3u * t + 1u)).position.xyz, p2 = vertex_at(index_at(3u * t + 2u)).position.xyz;
     float area = 0.5 * length(cross(p1 - v0.position.xyz, p2 - v0.position.xyz));
     return area * rb_hybrid_luminance(materials[floatBitsToUint(v0.uv.z)].emissive.rgb);
 }

@@ -12,6 +12,7 @@
 // whether its tile mask, as the next frame's requests read it, stops its rays (ba: 1 or 0).
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 
 layout(local_size_x = 8, local_size_y = 8) in;
 

@@ -5,6 +5,7 @@
 // surface is, the depth is RB_HYBRID_FAR: a ray is always in front of it.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 
 layout(local_size_x = 8, local_size_y = 8) in;
 

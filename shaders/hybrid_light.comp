@@ -15,6 +15,7 @@
 // rays'.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -36,7 +37,7 @@ bool screen_occluded(vec3 o, vec3 l, float dist)
     if (!(dot(p - o, l) < dist))
         return false;
     uint t = uint(imageLoad(gb_albedo, hit).w);
-    return bake_words[pc.bake.z + t] == 0u;
+    return bake_word(pc.bake.z + t) == 0u;
 }
 
 // The first emitter whose running sum is over x (one of positive power).
@@ -76,9 +77,9 @@ void light_sample(bvec2 lit, vec3 o, vec3 n, vec3 ng, vec3 v, vec4 spec, float f
     float total = rb_hybrid_emit_total();
     if (!(total > 0.0))
         return;
-    uint t = indices[floatBitsToUint(pc.scene.z) + pick_emitter(min(pick, 0.99999994) * total)];
-    rb_gpu_vertex v0 = verts[indices[3u * t]], v1 = verts[indices[3u * t + 1u]],
-                  v2 = verts[indices[3u * t + 2u]];
+    uint t = index_at(floatBitsToUint(pc.scene.z) + pick_emitter(min(pick, 0.99999994) * total));
+    rb_gpu_vertex v0 = vertex_at(index_at(3u * t)), v1 = vertex_at(index_at(3u * t + 1u)),
+                  v2 = vertex_at(index_at(3u * t + 2u));
     float su = sqrt(u.x), b1 = su * (1.0 - u.y), b2 = su * u.y;
     vec3 q = (1.0 - b1 - b2) * v0.position.xyz + b1 * v1.position.xyz + b2 * v2.position.xyz;
     vec3 d = q - o;

@@ -6,6 +6,7 @@
 // Rays past the queue's capacity are marked dropped and counted: they are not samples.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 
 layout(local_size_x = 256) in;
 

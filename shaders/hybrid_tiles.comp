@@ -7,6 +7,7 @@
 // are), for the lobe whose filter reaches across tiles.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 
 layout(local_size_x = 16, local_size_y = 16) in;
 

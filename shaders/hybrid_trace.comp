@@ -9,6 +9,7 @@
 // out of steps waits in its slot for the BVH.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 
 layout(local_size_x = 8, local_size_y = 8) in;
 

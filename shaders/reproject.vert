@@ -6,20 +6,22 @@
 // surfaces the G-buffer holds.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 #include "bindings_shared.h"
 #include "shared.h"
 #include "bdpt_shared.h"
+#include "geometry_shared.h"
 
 layout(std140, binding = RB_BIND_REPROJECT_GLOBALS) uniform Globals { rb_gpu_globals g; };
 layout(std140, binding = RB_BIND_REPROJECT_HISTORY) uniform History { rb_gpu_bdpt_history h; };
-layout(std430, binding = RB_BIND_REPROJECT_VERTICES + 0) readonly buffer V0 { rb_gpu_vertex v0[]; };
-layout(std430, binding = RB_BIND_REPROJECT_VERTICES + 1) readonly buffer V1 { rb_gpu_vertex v1[]; };
-layout(std430, binding = RB_BIND_REPROJECT_VERTICES + 2) readonly buffer V2 { rb_gpu_vertex v2[]; };
-layout(std430, binding = RB_BIND_REPROJECT_VERTICES + 3) readonly buffer V3 { rb_gpu_vertex v3[]; };
-layout(std430, binding = RB_BIND_REPROJECT_VERTICES + 4) readonly buffer V4 { rb_gpu_vertex v4[]; };
-layout(std430, binding = RB_BIND_REPROJECT_VERTICES + 5) readonly buffer V5 { rb_gpu_vertex v5[]; };
-layout(std430, binding = RB_BIND_REPROJECT_VERTICES + 6) readonly buffer V6 { rb_gpu_vertex v6[]; };
-layout(std430, binding = RB_BIND_REPROJECT_VERTICES + 7) readonly buffer V7 { rb_gpu_vertex v7[]; };
+layout(std140, binding = RB_BIND_REPROJECT_VERTICES + 0) uniform V0 { rb_gpu_geometry v0; };
+layout(std140, binding = RB_BIND_REPROJECT_VERTICES + 1) uniform V1 { rb_gpu_geometry v1; };
+layout(std140, binding = RB_BIND_REPROJECT_VERTICES + 2) uniform V2 { rb_gpu_geometry v2; };
+layout(std140, binding = RB_BIND_REPROJECT_VERTICES + 3) uniform V3 { rb_gpu_geometry v3; };
+layout(std140, binding = RB_BIND_REPROJECT_VERTICES + 4) uniform V4 { rb_gpu_geometry v4; };
+layout(std140, binding = RB_BIND_REPROJECT_VERTICES + 5) uniform V5 { rb_gpu_geometry v5; };
+layout(std140, binding = RB_BIND_REPROJECT_VERTICES + 6) uniform V6 { rb_gpu_geometry v6; };
+layout(std140, binding = RB_BIND_REPROJECT_VERTICES + 7) uniform V7 { rb_gpu_geometry v7; };
 
 invariant gl_Position;
 
@@ -30,21 +32,21 @@ vec3 then_position(uint a)
 {
     uint i = uint(gl_VertexIndex);
     switch (a) {
-    case 0u: return v0[i].position.xyz;
-    case 1u: return v1[i].position.xyz;
-    case 2u: return v2[i].position.xyz;
-    case 3u: return v3[i].position.xyz;
-    case 4u: return v4[i].position.xyz;
-    case 5u: return v5[i].position.xyz;
-    case 6u: return v6[i].position.xyz;
-    default: return v7[i].position.xyz;
+    case 0u: return v0.vertices.v[i].position.xyz;
+    case 1u: return v1.vertices.v[i].position.xyz;
+    case 2u: return v2.vertices.v[i].position.xyz;
+    case 3u: return v3.vertices.v[i].position.xyz;
+    case 4u: return v4.vertices.v[i].position.xyz;
+    case 5u: return v5.vertices.v[i].position.xyz;
+    case 6u: return v6.vertices.v[i].position.xyz;
+    default: return v7.vertices.v[i].position.xyz;
     }
 }
 
 void main()
 {
     // As gbuffer.vert computes it (the frame's own G-buffer: no offset).
-    vec4 clip = g.view_proj * vec4(v0[gl_VertexIndex].position.xyz, 1.0);
+    vec4 clip = g.view_proj * vec4(v0.vertices.v[gl_VertexIndex].position.xyz, 1.0);
     gl_Position = clip;
     for (uint a = 0u; a < h.info.x; a++) { // the ages past l are never read
         vec4 x = vec4(then_position(a), 1.0);

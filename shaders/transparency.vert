@@ -2,11 +2,13 @@
 // space, as gbuffer.vert projects them, so they meet the G-buffer's depth where it does.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 #include "bindings_shared.h"
 #include "shared.h"
+#include "geometry_shared.h"
 
 layout(std140, binding = RB_BIND_TRANSPARENCY_GLOBALS) uniform Globals { rb_gpu_globals g; };
-layout(std430, binding = RB_BIND_TRANSPARENCY_VERTICES) readonly buffer Verts { rb_gpu_vertex verts[]; };
+layout(std140, binding = RB_BIND_TRANSPARENCY_VERTICES) uniform Geometry { rb_gpu_geometry geo; };
 
 invariant gl_Position;
 
@@ -18,7 +20,7 @@ layout(location = 4) flat out uint o_material;
 
 void main()
 {
-    rb_gpu_vertex v = verts[gl_VertexIndex];
+    rb_gpu_vertex v = geo.vertices.v[gl_VertexIndex];
     o_pos = v.position.xyz;
     o_normal = v.normal.xyz;
     o_tangent = v.tangent;

@@ -3,9 +3,11 @@
 // view's frame (its transform is affine), which view.tesc and view.tese project.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_buffer_reference : require
 #include "view_shared.h"
+#include "geometry_shared.h"
 
-layout(std430, binding = RB_VIEW_BIND_VERTICES) readonly buffer Verts { rb_gpu_vertex verts[]; };
+layout(std140, binding = RB_VIEW_BIND_VERTICES) uniform Geometry { rb_gpu_geometry geo; };
 layout(std430, binding = RB_VIEW_BIND_VIEWS) readonly buffer Views { rb_gpu_view views[]; };
 layout(std430, binding = RB_VIEW_BIND_MATERIALS) readonly buffer Materials { rb_gpu_material materials[]; };
 layout(push_constant) uniform Push { rb_gpu_view_push pc; };
@@ -17,7 +19,7 @@ layout(location = 3) flat out uint o_material;
 
 void main()
 {
-    rb_gpu_vertex v = verts[gl_VertexIndex];
+    rb_gpu_vertex v = geo.vertices.v[gl_VertexIndex];
     vec3 p = v.position.xyz;
     o_pos = p;
     o_normal = v.normal.xyz;

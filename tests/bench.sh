@@ -5,7 +5,9 @@
 # reference's speed, and its error on the Cornell box at 64 to 1024 spp; last, the bdpt
 # integrator's figures (tests/bench-bdpt.sh, which says what they are), its temporal caches'
 # (tests/bench-temporal.sh) and the hybrid integrator's (tests/bench-hybrid.sh); and the CPU time
-# of HDR-FLIP on a 1920x1080 pair, on one core (tests/bench-flip.sh).
+# of HDR-FLIP on a 1920x1080 pair, on one core (tests/bench-flip.sh); then each integrator's time
+# and peak memory on a generated scene of 1 M triangles, and of 10 M with RB_BENCH_10M=1
+# (tests/bench-scale.sh).
 set -eu
 BUILD=${BUILD:-build}
 . tests/bench-lib.sh
@@ -105,3 +107,4 @@ BUILD=$BUILD sh tests/bench-bdpt.sh
 BUILD=$BUILD sh tests/bench-temporal.sh
 BUILD=$BUILD sh tests/bench-hybrid.sh
 BUILD=$BUILD sh tests/bench-flip.sh
+BUILD=$BUILD sh tests/bench-scale.sh

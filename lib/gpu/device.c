@@ -185,8 +185,10 @@ static void missing_requirements(VkPhysicalDevice phys, char *out, size_t size)
             MISSING("%s", required_extensions[r]);
     }
     free(exts);
+    VkPhysicalDeviceVulkan12Features f12 = {
+        .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
     VkPhysicalDeviceVulkan13Features f13 = {
-        .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+        .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES, .pNext = &f12};
     VkPhysicalDeviceFeatures2 f2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2,
                                     .pNext = &f13};
     if (props.apiVersion >= VK_API_VERSION_1_3) {
@@ -195,6 +197,8 @@ static void missing_requirements(VkPhysicalDevice phys, char *out, size_t size)
             MISSING("dynamicRendering");
         if (!f13.synchronization2)
             MISSING("synchronization2");
+        if (!f12.bufferDeviceAddress) /* the scene's arrays (rb_gpu_buffer_desc.is_addressed) */
+            MISSING("bufferDeviceAddress");
         for (size_t i = 0; i < sizeof(required_features) / sizeof(required_features[0]); i++)
             if (!*feature(&f2.features, i))
                 MISSING("%s", required_features[i].name);
@@ -388,8 +392,13 @@ enum rb_status rb_gpu_create(const struct rb_gpu_desc *desc, struct rb_gpu **out
         .queueCount = 1,
         .pQueuePriorities = &prio,
     };
+    VkPhysicalDeviceVulkan12Features f12 = {
+        .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES,
+        .bufferDeviceAddress = VK_TRUE,
+    };
     VkPhysicalDeviceVulkan13Features f13 = {
         .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES,
+        .pNext = &f12,
         .dynamicRendering = VK_TRUE,
         .synchronization2 = VK_TRUE,
     };
@@ -572,7 +581,7 @@ enum rb_status rb_gpu_print_devices(FILE *f, struct rb_err *err)
         fprintf(f, "    timestamp period: %g ns\n", p.limits.timestampPeriod);
         fprintf(f, "    max storage buffer range: %u bytes\n", p.limits.maxStorageBufferRange);
         fprintf(f, "    max color attachments: %u\n", p.limits.maxColorAttachments);
-        fprintf(f, "    uses: Vulkan 1.3, dynamicRendering, synchronization2");
+        fprintf(f, "    uses: Vulkan 1.3, dynamicRendering, synchronization2, bufferDeviceAddress");
         for (size_t k = 0; k < sizeof(required_features) / sizeof(required_features[0]); k++)
             fprintf(f, ", %s", required_features[k].name);
         fprintf(f, ", %s\n", VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME);

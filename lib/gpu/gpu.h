@@ -129,13 +129,18 @@ struct rb_gpu_buffer {
     VkBuffer buffer;
     VkDeviceMemory memory;
     VkDeviceSize size;
-    void *mapped; /* non-NULL for host-visible buffers */
+    void *mapped;            /* non-NULL for host-visible buffers */
+    VkDeviceAddress address; /* its device address when created is_addressed, else 0 */
 };
 
 struct rb_gpu_buffer_desc {
     VkDeviceSize size_bytes;
     VkBufferUsageFlags usage;
     bool is_host_visible; /* mapped, coherent: uploads each frame, readback */
+    /* Read by shaders through its device address (GL_EXT_buffer_reference), which no
+     * maxStorageBufferRange bounds: the scene's arrays, which grow with its triangles. Its size
+     * is bound by maxBufferSize and maxMemoryAllocationSize alone (rb_gpu_check_buffer_size). */
+    bool is_addressed;
     const char *debug_name;
 };
 

@@ -59,7 +59,7 @@ enum rb_status rb_gpu_image_init(struct rb_gpu *gpu, const struct rb_gpu_image_d
         return rb_gpu_fail(err, vr, "vkCreateImage", desc->debug_name);
     VkMemoryRequirements req;
     vkGetImageMemoryRequirements(gpu->device, img.image, &req);
-    st = rb_gpu_alloc(gpu, req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0, desc->debug_name,
+    st = rb_gpu_alloc(gpu, req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0, 0, desc->debug_name,
                       &img.memory, err);
     if (st)
         goto fail;

@@ -8,7 +8,8 @@
 
 enum rb_status rb_gpu_alloc(struct rb_gpu *gpu, VkMemoryRequirements req,
                             VkMemoryPropertyFlags want, VkMemoryPropertyFlags need,
-                            const char *what, VkDeviceMemory *out, struct rb_err *err)
+                            VkMemoryAllocateFlags alloc_flags, const char *what,
+                            VkDeviceMemory *out, struct rb_err *err)
 {
     int best = -1;
     for (int pass = 0; pass < 2 && best < 0; pass++) {
@@ -22,8 +23,13 @@ enum rb_status rb_gpu_alloc(struct rb_gpu *gpu, VkMemoryRequirements req,
     }
     if (best < 0)
         return rb_errf(err, RB_E_VULKAN, "no memory type for '%s'", what);
+    VkMemoryAllocateFlagsInfo fi = {
+        .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO,
+        .flags = alloc_flags,
+    };
     VkMemoryAllocateInfo ai = {
         .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO,
+        .pNext = alloc_flags ? &fi : NULL,
         .allocationSize = req.size,
         .memoryTypeIndex = (uint32_t)best,
     };
@@ -47,7 +53,8 @@ enum rb_status rb_gpu_buffer_init(struct rb_gpu *gpu, const struct rb_gpu_buffer
     VkBufferCreateInfo ci = {
         .sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO,
         .size = size,
-        .usage = desc->usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+        .usage = desc->usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
+                 (desc->is_addressed ? VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT : 0),
         .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
     };
     VkResult vr = vkCreateBuffer(gpu->device, &ci, NULL, &b.buffer);
@@ -60,7 +67,9 @@ enum rb_status rb_gpu_buffer_init(struct rb_gpu *gpu, const struct rb_gpu_buffer
                                                        : 0;
     VkMemoryPropertyFlags want = desc->is_host_visible ? VK_MEMORY_PROPERTY_HOST_CACHED_BIT
                                                        : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
-    st = rb_gpu_alloc(gpu, req, want, need, desc->debug_name, &b.memory, err);
+    st = rb_gpu_alloc(gpu, req, want, need,
+                      desc->is_addressed ? VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT : 0,
+                      desc->debug_name, &b.memory, err);
     if (st)
         goto fail;
     if ((vr = vkBindBufferMemory(gpu->device, b.buffer, b.memory, 0)) < 0) {
@@ -72,6 +81,11 @@ enum rb_status rb_gpu_buffer_init(struct rb_gpu *gpu, const struct rb_gpu_buffer
         st = rb_gpu_fail(err, vr, "vkMapMemory", desc->debug_name);
         goto fail;
     }
+    if (desc->is_addressed)
+        b.address = vkGetBufferDeviceAddress(
+            gpu->device,
+            &(VkBufferDeviceAddressInfo){.sType = VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO,
+                                         .buffer = b.buffer});
     b.size = size;
     rb_gpu_name(gpu, VK_OBJECT_TYPE_BUFFER, (uint64_t)b.buffer, desc->debug_name);
     *out = b;

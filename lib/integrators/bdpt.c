@@ -230,8 +230,17 @@ static enum rb_status upload_emitters(struct rb_integrator *it, struct rb_bdpt_f
         dst += p->vertex_count;
     }
     b->emitter_count = count;
-    enum rb_status st = rb_frame_buffer(it->gpu, (VkDeviceSize)(count ? count : 1) * sizeof(*list),
-                                        STORAGE, false, "bdpt.emitters", &b->emitters, err);
+    /* Each is one binding (unlike the vertices, not read by address): past the range (8.4 M
+     * emissive triangles on lavapipe) the device cannot, said with the count. */
+    enum rb_status st = rb_gpu_check_storage_range(it->gpu, "emitters", "bdpt.emitters",
+                                                   (VkDeviceSize)count * sizeof(*list), err);
+    if (st) {
+        free(list);
+        rb_err_prefix(err, "%u emissive triangles", count);
+        return st;
+    }
+    st = rb_frame_buffer(it->gpu, (VkDeviceSize)(count ? count : 1) * sizeof(*list), STORAGE, false,
+                         "bdpt.emitters", &b->emitters, err);
     if (st == RB_OK)
         st = rb_frame_buffer(it->gpu, (VkDeviceSize)(count ? count : 1) * sizeof(float), STORAGE,
                              false, "bdpt.emitter_cdf", &b->emitter_cdf, err);

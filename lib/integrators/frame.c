@@ -41,6 +41,23 @@ static enum rb_status upload_buffer(struct rb_gpu *gpu, const void *data, VkDevi
     return st;
 }
 
+/* As upload_buffer, for the scene's arrays the shaders read by address (geometry_shared.h). */
+static enum rb_status upload_addressed(struct rb_gpu *gpu, const void *data, VkDeviceSize size,
+                                       VkBufferUsageFlags usage, const char *name,
+                                       struct rb_gpu_buffer *out, struct rb_err *err)
+{
+    enum rb_status st =
+        rb_gpu_buffer_init(gpu,
+                           &(struct rb_gpu_buffer_desc){.size_bytes = size ? size : 16,
+                                                        .usage = usage,
+                                                        .is_addressed = true,
+                                                        .debug_name = name},
+                           out, err);
+    if (st == RB_OK && size)
+        st = rb_gpu_buffer_upload(gpu, out, data, size, err);
+    return st;
+}
+
 static uint32_t next_pow2(uint32_t v)
 {
     uint32_t p = 1;
@@ -264,7 +281,16 @@ uint32_t *rb_frame_world_indices(const struct rb_scene *scene, const struct rb_s
 }
 
 /* The world vertex buffer holds each instance's vertices in instance order; the index buffer
- * points into it, so one indexed draw covers the scene. */
+ * points into it, so one indexed draw covers the scene.
+ *
+ * Design: the arrays that grow with the scene's triangles (the source and world vertices, the
+ * morph deltas, the indices) are read by the shaders through their device addresses, kept in
+ * each slot's geometry record (shaders/common/geometry_shared.h), not bound as storage buffers.
+ * A binding spans at most maxStorageBufferRange (128 MiB on lavapipe: 1.6 M source vertices);
+ * splitting an array over several bindings would need descriptor indexing, which lavapipe
+ * lacks, or a switch over the bindings in every shader that reads a vertex. An address has no
+ * range: each array is one buffer and one allocation, bound only by maxBufferSize and
+ * maxMemoryAllocationSize (check_limits, raybundle-job(5) LIMITS). */
 static enum rb_status upload_geometry(struct rb_gpu *gpu, const struct rb_scene *scene,
                                       const struct rb_scene_pose *pose, struct rb_frame *frame,
                                       struct rb_err *err)
@@ -286,17 +312,17 @@ static enum rb_status upload_geometry(struct rb_gpu *gpu, const struct rb_scene 
     frame->index_count = (uint32_t)icount;
     frame->instance_count = pose->instance_count;
     enum rb_status st =
-        upload_buffer(gpu, indices, icount * sizeof(uint32_t),
-                      VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                      "indices", &frame->indices, err);
+        upload_addressed(gpu, indices, icount * sizeof(uint32_t),
+                         VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                         "indices", &frame->indices, err);
     free(indices);
     if (st == RB_OK)
-        st = upload_buffer(gpu, scene->vertices,
-                           (VkDeviceSize)scene->vertex_count * sizeof(struct rb_scene_vertex),
-                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "vertices.source",
-                           &frame->src_vertices, err);
+        st = upload_addressed(gpu, scene->vertices,
+                              (VkDeviceSize)scene->vertex_count * sizeof(struct rb_scene_vertex),
+                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "vertices.source",
+                              &frame->src_vertices, err);
     if (st == RB_OK)
-        st = upload_buffer(
+        st = upload_addressed(
             gpu, scene->morph_deltas,
             (VkDeviceSize)scene->morph_delta_count * sizeof(struct rb_scene_morph_delta),
             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "morph.deltas", &frame->morph_deltas, err);
@@ -314,10 +340,25 @@ static enum rb_status upload_geometry(struct rb_gpu *gpu, const struct rb_scene 
                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "weights",
                                  &slot->weights, err);
         if (st == RB_OK)
-            st = rb_frame_buffer(gpu, vcount * sizeof(struct rb_gpu_vertex),
-                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
-                                     VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                 false, "vertices.world", &slot->vertices, err);
+            st = rb_gpu_buffer_init(
+                gpu,
+                &(struct rb_gpu_buffer_desc){
+                    .size_bytes = vcount ? vcount * sizeof(struct rb_gpu_vertex) : 16,
+                    .usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                    .is_addressed = true,
+                    .debug_name = "vertices.world"},
+                &slot->vertices, err);
+        if (st == RB_OK)
+            st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_geometry),
+                                 VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "geometry",
+                                 &slot->geometry, err);
+        if (st == RB_OK)
+            memcpy(slot->geometry.mapped,
+                   &(struct rb_gpu_geometry){.vertices = slot->vertices.address,
+                                             .src_vertices = frame->src_vertices.address,
+                                             .morph_deltas = frame->morph_deltas.address,
+                                             .indices = frame->indices.address},
+                   sizeof(struct rb_gpu_geometry));
     }
     return st;
 }
@@ -475,9 +516,10 @@ static enum rb_status upload_env(struct rb_gpu *gpu, const struct rb_integrator_
 
 /* The device limits the frame's sizes must respect, checked before anything is allocated: the
  * readback (one buffer the host reads, bound by the output pass in aligned bands of rows), the
- * scene's storage buffers (bound whole by animate, gbuffer and shadow) and every dispatch's
- * workgroup counts. The workgroup sizes are the local sizes of shaders/output.comp and
- * direct.comp (8 x 8 pixels) and animate.comp (64 vertices of one instance). */
+ * scene's arrays (the vertices and indices read by address, each one buffer and one allocation;
+ * the rest bound whole by animate, gbuffer and shadow) and every dispatch's workgroup counts.
+ * The workgroup sizes are the local sizes of shaders/output.comp and direct.comp (8 x 8 pixels);
+ * animate splits an instance's vertices over dispatches itself (rb_pass_animate_record). */
 static enum rb_status check_limits(const struct rb_gpu *gpu, const struct rb_scene *scene,
                                    const struct rb_scene_pose *pose, uint32_t w, uint32_t h,
                                    uint32_t floats_per_pixel, struct rb_err *err)
@@ -496,33 +538,36 @@ static enum rb_status check_limits(const struct rb_gpu *gpu, const struct rb_sce
         return st;
     }
 
-    uint64_t world_vertices = 0;
-    uint32_t most_vertices = 0;
+    uint64_t world_vertices = 0, world_indices = 0;
     for (uint32_t i = 0; i < pose->instance_count; i++) {
-        uint32_t n = scene->primitives[pose->instances[i].primitive].vertex_count;
-        world_vertices += n;
-        most_vertices = n > most_vertices ? n : most_vertices;
+        const struct rb_scene_primitive *p = &scene->primitives[pose->instances[i].primitive];
+        world_vertices += p->vertex_count;
+        world_indices += p->index_count;
     }
     const struct {
         const char *pass, *name;
         VkDeviceSize bytes;
+        bool is_addressed; /* one buffer read by address, else one storage binding */
     } bound[] = {
         {"animate", "vertices.source",
-         (VkDeviceSize)scene->vertex_count * sizeof(struct rb_scene_vertex)},
+         (VkDeviceSize)scene->vertex_count * sizeof(struct rb_scene_vertex), true},
         {"animate", "morph.deltas",
-         (VkDeviceSize)scene->morph_delta_count * sizeof(struct rb_scene_morph_delta)},
+         (VkDeviceSize)scene->morph_delta_count * sizeof(struct rb_scene_morph_delta), true},
+        {"animate", "vertices.world", world_vertices * sizeof(struct rb_gpu_vertex), true},
+        {"gbuffer", "indices", world_indices * sizeof(uint32_t), true},
         {"animate", "instances",
-         (VkDeviceSize)pose->instance_count * sizeof(struct rb_gpu_instance)},
-        {"animate", "joints", (VkDeviceSize)pose->joint_matrix_count * sizeof(struct rb_mat4)},
-        {"animate", "weights", (VkDeviceSize)pose->morph_weight_count * sizeof(float)},
-        {"animate", "vertices.world", world_vertices * sizeof(struct rb_gpu_vertex)},
+         (VkDeviceSize)pose->instance_count * sizeof(struct rb_gpu_instance), false},
+        {"animate", "joints", (VkDeviceSize)pose->joint_matrix_count * sizeof(struct rb_mat4),
+         false},
+        {"animate", "weights", (VkDeviceSize)pose->morph_weight_count * sizeof(float), false},
         {"gbuffer", "materials",
-         (VkDeviceSize)scene->material_count * sizeof(struct rb_gpu_material)},
+         (VkDeviceSize)scene->material_count * sizeof(struct rb_gpu_material), false},
     };
     for (size_t i = 0; i < sizeof(bound) / sizeof(bound[0]) && st == RB_OK; i++)
-        st = rb_gpu_check_storage_range(gpu, bound[i].pass, bound[i].name, bound[i].bytes, err);
-    if (st == RB_OK)
-        st = rb_gpu_check_dispatch(gpu, "animate", (most_vertices + 63) / 64, 1, 1, err);
+        st = bound[i].is_addressed
+                 ? rb_gpu_check_buffer_size(gpu, bound[i].pass, bound[i].name, bound[i].bytes, err)
+                 : rb_gpu_check_storage_range(gpu, bound[i].pass, bound[i].name, bound[i].bytes,
+                                              err);
     if (st) /* the vertices as the loader keeps them: flat-shaded triangles unshared */
         rb_err_prefix(err, "scene '%s' (%u vertices, %llu as posed)",
                       scene->path ? scene->path : "?", scene->vertex_count,
@@ -702,6 +747,7 @@ void rb_frame_release(struct rb_gpu *gpu, struct rb_frame *frame)
     rb_gpu_buffer_release(gpu, &frame->lights);
     rb_gpu_image_release(gpu, &frame->env_map);
     for (uint32_t s = frame->slot_count; s-- > 0 && frame->slots;) {
+        rb_gpu_buffer_release(gpu, &frame->slots[s].geometry);
         rb_gpu_buffer_release(gpu, &frame->slots[s].vertices);
         rb_gpu_buffer_release(gpu, &frame->slots[s].weights);
         rb_gpu_buffer_release(gpu, &frame->slots[s].joints);

@@ -179,9 +179,9 @@ static void destroy(struct rb_integrator *it, void *state)
     rb_bvh_release(&w->bvh);
     struct rb_gpu *gpu = it->gpu;
     struct rb_hybrid_frame *h = &d->h;
-    struct rb_gpu_buffer *bufs[] = {&h->hiz,      &h->slots,  &h->counters,
-                                    &h->queue,    &h->blocks, &h->bvh_nodes,
-                                    &h->bvh_tris, &h->tiles,  &h->indices};
+    struct rb_gpu_buffer *bufs[] = {&h->hiz,     &h->slots,     &h->counters, &h->queue,
+                                    &h->blocks,  &h->bvh_nodes, &h->bvh_tris, &h->tiles,
+                                    &h->indices, &h->table};
     for (size_t i = 0; i < COUNT(bufs); i++)
         rb_gpu_buffer_release(gpu, bufs[i]);
     for (uint32_t i = 0; i < 2; i++)
@@ -328,28 +328,36 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
     /* a node holds both children: no more nodes than leaves, so than triangles (a root at
      * least) */
     d->node_capacity = d->tri_capacity;
-    /* Every buffer is bound whole: each within maxStorageBufferRange, or a clear error. */
+    /* Every buffer is bound whole, each within maxStorageBufferRange, or a clear error; but what
+     * grows with the scene's triangles is read by address (geometry_shared.h) and needs only to
+     * be one buffer: the triangles' indices with the tables after them, and the bake after the
+     * BVH's triangles (bound as far as those, budget-bound). */
+    uint64_t tri_bytes = (uint64_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle);
+    uint64_t bake_bytes = ((uint64_t)d->word_vec4s + d->bake_capacity) * 16;
+    uint64_t table_bytes =
+        (all_triangles(d) * 3 + d->emitter_count + d->env_floats) * sizeof(uint32_t);
     const struct {
         const char *name;
         uint64_t bytes;
+        uint64_t unbound_bytes; /* read by address alone, past the binding's range */
     } bound[] = {
-        {"hierarchical depth", cells * 2 * sizeof(float)},
-        {"ray slots", h->slot_count * sizeof(struct rb_gpu_hybrid_slot)},
-        {"ray queue", (uint64_t)d->queue_capacity * sizeof(uint32_t)},
-        {"queue blocks and emitter table", (blocks + d->emitter_count) * sizeof(uint32_t)},
-        {"BVH nodes", (uint64_t)d->node_capacity * sizeof(struct rb_gpu_bvh_node)},
-        {"BVH triangles and baked light",
-         (uint64_t)d->tri_capacity * sizeof(struct rb_gpu_bvh_triangle) +
-             ((uint64_t)d->word_vec4s + d->bake_capacity) * 16},
-        {"noise tiles", 2 * tiles * sizeof(float)},
-        {"triangles, emitters and the environment's table",
-         (all_triangles(d) * 3 + d->emitter_count + d->env_floats) * sizeof(uint32_t)},
+        {"hierarchical depth", cells * 2 * sizeof(float), 0},
+        {"ray slots", h->slot_count * sizeof(struct rb_gpu_hybrid_slot), 0},
+        {"ray queue", (uint64_t)d->queue_capacity * sizeof(uint32_t), 0},
+        {"queue blocks and emitter table", (blocks + d->emitter_count) * sizeof(uint32_t), 0},
+        {"BVH nodes", (uint64_t)d->node_capacity * sizeof(struct rb_gpu_bvh_node), 0},
+        {"BVH triangles and baked light", tri_bytes + bake_bytes, bake_bytes},
+        {"noise tiles", 2 * tiles * sizeof(float), 0},
+        {"triangles, emitters and the environment's table", table_bytes, table_bytes},
     };
     enum rb_status st;
-    for (size_t i = 0; i < COUNT(bound); i++)
+    for (size_t i = 0; i < COUNT(bound); i++) {
+        uint64_t range = bound[i].bytes - bound[i].unbound_bytes;
         if ((st = rb_gpu_check_buffer_size(gpu, "hybrid", bound[i].name, bound[i].bytes, err)) ||
-            (st = rb_gpu_check_storage_range(gpu, "hybrid", bound[i].name, bound[i].bytes, err)))
+            (range && (st = rb_gpu_check_storage_range(gpu, "hybrid", bound[i].name, range, err))))
             return st;
+    }
+    h->bvh_tri_bytes = tri_bytes;
     if ((st = rb_frame_buffer(gpu, bound[0].bytes, storage, false, "hybrid.hiz", &h->hiz, err)) ||
         (st = rb_frame_buffer(gpu, bound[1].bytes, storage, false, "hybrid.slots", &h->slots,
                               err)) ||
@@ -362,13 +370,32 @@ static enum rb_status create_resources(struct rb_integrator *it, struct hybrid *
                               err)) ||
         (st = rb_frame_buffer(gpu, bound[4].bytes, storage, true, "hybrid.bvh_nodes", &h->bvh_nodes,
                               err)) ||
-        (st = rb_frame_buffer(gpu, bound[5].bytes, storage, true, "hybrid.bvh_tris", &h->bvh_tris,
-                              err)) ||
+        (st = rb_gpu_buffer_init(gpu,
+                                 &(struct rb_gpu_buffer_desc){.size_bytes = bound[5].bytes,
+                                                              .usage = storage,
+                                                              .is_host_visible = true,
+                                                              .is_addressed = true,
+                                                              .debug_name = "hybrid.bvh_tris"},
+                                 &h->bvh_tris, err)) ||
         (st = rb_frame_buffer(gpu, bound[6].bytes, storage, false, "hybrid.tiles", &h->tiles,
                               err)) ||
-        (st = rb_frame_buffer(gpu, bound[7].bytes ? bound[7].bytes : 4, storage, true,
-                              "hybrid.indices", &h->indices, err)))
+        (st = rb_gpu_buffer_init(
+             gpu,
+             &(struct rb_gpu_buffer_desc){.size_bytes = bound[7].bytes ? bound[7].bytes : 4,
+                                          .usage = storage,
+                                          .is_host_visible = true,
+                                          .is_addressed = true,
+                                          .debug_name = "hybrid.indices"},
+             &h->indices, err)) ||
+        (st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_hybrid_table),
+                              VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "hybrid.table", &h->table,
+                              err)))
         return st;
+    memcpy(h->table.mapped,
+           &(struct rb_gpu_hybrid_table){.indices = h->indices.address,
+                                         .bake = h->bvh_tris.address,
+                                         .bake_words = h->bvh_tris.address},
+           sizeof(struct rb_gpu_hybrid_table));
     memcpy(h->indices.mapped, d->indices, all_triangles(d) * 3 * sizeof(uint32_t));
     memcpy((uint32_t *)h->indices.mapped + all_triangles(d) * 3, d->emitters,
            (size_t)d->emitter_count * sizeof(uint32_t));

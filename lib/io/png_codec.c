@@ -131,6 +131,26 @@ out:
 
 /* ---- decoding --------------------------------------------------------------------------- */
 
+/* A byte count in powers of 1000 to three figures: "6.4 GB", "1.07 GB", "512 kB". */
+static void bytes_text(uint64_t n, char *out, size_t size)
+{
+    static const char *const units[] = {"bytes", "kB", "MB", "GB", "TB"};
+    double v = (double)n;
+    int u = 0;
+    while (v >= 1000.0 && u < 4) {
+        v /= 1000.0;
+        u++;
+    }
+    snprintf(out, size, u ? "%.3g %s" : "%.0f %s", v, units[u]);
+}
+
+/* One row of n-channel samples of depth bits as floats. */
+static void row_to_floats(const unsigned char *r, size_t count, int depth, float *out)
+{
+    for (size_t i = 0; i < count; i++)
+        out[i] = depth == 8 ? r[i] / 255.0f : ((r[2 * i] << 8) | r[2 * i + 1]) / 65535.0f;
+}
+
 bool rb_png_decode(const char *path, uint32_t *width_px, uint32_t *height_px,
                    uint32_t *channel_count, float **pixels, char *msg, size_t msg_size)
 {
@@ -162,7 +182,7 @@ bool rb_png_decode(const char *path, uint32_t *width_px, uint32_t *height_px,
     /* Palettes become RGB(A), low-bit gray becomes 8 bits, tRNS becomes alpha; 16-bit samples
      * come most significant byte first, as stored. */
     png_set_expand(png);
-    png_set_interlace_handling(png);
+    int passes = png_set_interlace_handling(png);
     png_read_update_info(png, info);
 
     uint32_t w = png_get_image_width(png, info), h = png_get_image_height(png, info);
@@ -173,24 +193,46 @@ bool rb_png_decode(const char *path, uint32_t *width_px, uint32_t *height_px,
         snprintf(msg, msg_size, "unsupported PNG layout (%u channels, %d bits)", n, depth);
         goto out;
     }
-    raw = malloc(row_bytes * h);
-    rows = malloc(h * sizeof(png_bytep));
-    values = malloc((size_t)w * h * n * sizeof(float));
-    if (!raw || !rows || !values) {
-        snprintf(msg, msg_size, "out of memory");
+    /* Bounded by the size the header declares, before anything is allocated or inflated: the
+     * limit of the glTF loader's decoder (stb_image's, lib/scene/gltf_shim.cpp), 2^30 samples
+     * (width x height x channels), a 4.3 GB image of floats at most. */
+    uint64_t samples = (uint64_t)w * h * n;
+    if (samples > RB_PNG_MAX_SAMPLES) {
+        char size_text[32], limit_text[32];
+        bytes_text(samples, size_text, sizeof(size_text));
+        bytes_text(RB_PNG_MAX_SAMPLES, limit_text, sizeof(limit_text));
+        if (strcmp(size_text, limit_text) == 0) { /* just past it: the exact counts */
+            snprintf(size_text, sizeof(size_text), "%llu bytes", (unsigned long long)samples);
+            snprintf(limit_text, sizeof(limit_text), "%llu bytes", RB_PNG_MAX_SAMPLES);
+        }
+        snprintf(msg, msg_size,
+                 "the PNG is %u x %u pixels of %u channel%s (%s), too large: the decoder takes "
+                 "at most %s (width x height x channels)",
+                 w, h, n, n == 1 ? "" : "s", size_text, limit_text);
         goto out;
     }
-    for (uint32_t y = 0; y < h; y++)
-        rows[y] = raw + y * row_bytes;
-    png_read_image(png, rows);
-    png_read_end(png, NULL);
-    for (uint32_t y = 0; y < h; y++) {
-        const unsigned char *r = rows[y];
-        for (size_t i = 0; i < (size_t)w * n; i++) {
-            float v = depth == 8 ? r[i] / 255.0f : ((r[2 * i] << 8) | r[2 * i + 1]) / 65535.0f;
-            values[(size_t)y * w * n + i] = v;
+    values = malloc(samples * sizeof(float));
+    /* An interlaced image is read whole, in its passes; any other a row at a time into one row's
+     * bytes, so that the bytes as stored are never held beside the floats. */
+    raw = malloc(passes > 1 ? row_bytes * h : row_bytes);
+    rows = passes > 1 ? malloc(h * sizeof(png_bytep)) : NULL;
+    if (!raw || !values || (passes > 1 && !rows)) {
+        snprintf(msg, msg_size, "out of memory for %u x %u pixels of %u channels", w, h, n);
+        goto out;
+    }
+    if (passes > 1) {
+        for (uint32_t y = 0; y < h; y++)
+            rows[y] = raw + y * row_bytes;
+        png_read_image(png, rows);
+        for (uint32_t y = 0; y < h; y++)
+            row_to_floats(rows[y], (size_t)w * n, depth, values + (size_t)y * w * n);
+    } else {
+        for (uint32_t y = 0; y < h; y++) {
+            png_read_row(png, raw, NULL);
+            row_to_floats(raw, (size_t)w * n, depth, values + (size_t)y * w * n);
         }
     }
+    png_read_end(png, NULL);
     *width_px = w;
     *height_px = h;
     *channel_count = n;

@@ -16,9 +16,15 @@ bool rb_png_is_png(const char *path);
 bool rb_png_encode(const uint8_t *rgba, uint32_t width_px, uint32_t height_px, const char *software,
                    void **out, size_t *size, char *msg, size_t msg_size);
 
+/* The most samples (width x height x channels, after expansion) rb_png_decode takes: 2^30, the
+ * glTF loader's decoder's limit. */
+#define RB_PNG_MAX_SAMPLES (1ull << 30)
+
 /* Decodes a PNG file: gray, gray+alpha, RGB or RGBA, 8 or 16 bits (palettes and lower depths
  * expanded), each value as stored divided by 255 or 65535 (no gamma, no premultiplication).
- * *pixels (width*height*channels floats, freed with free()) only on success. */
+ * *pixels (width*height*channels floats, freed with free()) only on success. A PNG whose header
+ * declares more than RB_PNG_MAX_SAMPLES is refused before anything is allocated or inflated,
+ * msg naming its size and the limit. */
 bool rb_png_decode(const char *path, uint32_t *width_px, uint32_t *height_px,
                    uint32_t *channel_count, float **pixels, char *msg, size_t msg_size);
 

@@ -1,6 +1,7 @@
 /* animate: morph targets, skins and node transforms on the GPU (DESIGN.md "animate"). The CPU
  * evaluates the animation curves into per-instance matrices and weights; this pass deforms the
- * vertices, one dispatch per instance, into the slot's world-space vertex buffer. */
+ * vertices, one dispatch per instance (or per run of its vertices, past the workgroup count),
+ * into the slot's world-space vertex buffer, read and written by address (geometry_shared.h). */
 #include "passes/passes_int.h"
 
 #include <stdint.h>
@@ -13,12 +14,10 @@ struct rb_pass_animate {
 };
 
 static const struct rb_pass_binding bindings[] = {
-    RB_PASS_BIND(RB_BIND_ANIMATE_SRC_VERTICES, STORAGE_BUFFER),
-    RB_PASS_BIND(RB_BIND_ANIMATE_MORPH_DELTAS, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_ANIMATE_GEOMETRY, UNIFORM_BUFFER),
     RB_PASS_BIND(RB_BIND_ANIMATE_INSTANCES, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_ANIMATE_JOINTS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_ANIMATE_WEIGHTS, STORAGE_BUFFER),
-    RB_PASS_BIND(RB_BIND_ANIMATE_VERTICES, STORAGE_BUFFER),
 };
 _Static_assert(COUNT(bindings) == RB_BIND_ANIMATE_COUNT, "animate bindings");
 
@@ -32,7 +31,7 @@ enum rb_status rb_pass_animate_create(struct rb_gpu *gpu, struct rb_pass_animate
         gpu,
         &(struct rb_pass_compute_desc){.name = "animate",
                                        RB_PASS_BINDINGS(bindings),
-                                       .push_bytes = sizeof(uint32_t),
+                                       .push_bytes = 2 * sizeof(uint32_t),
                                        .spv = rb_spv_animate_comp,
                                        .spv_bytes = sizeof(rb_spv_animate_comp)},
         &p->pass, err);
@@ -48,20 +47,25 @@ void rb_pass_animate_record(struct rb_pass_animate *p, VkCommandBuffer cmd,
                             const struct rb_frame *frame, const struct rb_frame_slot *slot)
 {
     struct rb_pass_bindings b = {.pass = &p->pass};
-    rb_pass_bind_buffer(&b, RB_BIND_ANIMATE_SRC_VERTICES, &frame->src_vertices);
-    rb_pass_bind_buffer(&b, RB_BIND_ANIMATE_MORPH_DELTAS, &frame->morph_deltas);
+    rb_pass_bind_buffer(&b, RB_BIND_ANIMATE_GEOMETRY, &slot->geometry);
     rb_pass_bind_buffer(&b, RB_BIND_ANIMATE_INSTANCES, &slot->instances);
     rb_pass_bind_buffer(&b, RB_BIND_ANIMATE_JOINTS, &slot->joints);
     rb_pass_bind_buffer(&b, RB_BIND_ANIMATE_WEIGHTS, &slot->weights);
-    rb_pass_bind_buffer(&b, RB_BIND_ANIMATE_VERTICES, &slot->vertices);
     rb_pass_record_bindings(cmd, &b);
+    /* An instance of more than maxComputeWorkGroupCount[0] groups of 64 vertices (4.2 M on
+     * lavapipe) takes several dispatches, each from its first vertex. */
+    uint32_t most_groups = p->pass.gpu->props.limits.maxComputeWorkGroupCount[0];
     for (uint32_t i = 0; i < frame->instance_count; i++) {
         uint32_t count = frame->instances[i].range[1];
-        if (count == 0)
-            continue;
-        vkCmdPushConstants(cmd, p->pass.layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0,
-                           sizeof(uint32_t), &i);
-        vkCmdDispatch(cmd, (count + 63) / 64, 1, 1);
+        for (uint32_t first = 0; first < count;) {
+            uint32_t groups = (count - first + 63) / 64;
+            groups = groups < most_groups ? groups : most_groups;
+            uint32_t push[2] = {i, first};
+            vkCmdPushConstants(cmd, p->pass.layout.pipeline_layout, VK_SHADER_STAGE_ALL, 0,
+                               sizeof(push), push);
+            vkCmdDispatch(cmd, groups, 1, 1);
+            first += groups * 64; /* counts stay below 2^31 (upload_geometry) */
+        }
     }
 }
 

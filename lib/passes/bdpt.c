@@ -29,7 +29,7 @@ static const struct rb_pass_binding bounds_bindings[] = {
 _Static_assert(COUNT(bounds_bindings) == RB_BIND_BDPT_BOUNDS_COUNT, "bounds bindings");
 
 static const struct rb_pass_binding emitters_bindings[] = {
-    RB_PASS_BIND(RB_BIND_BDPT_EMITTERS_VERTICES, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_EMITTERS_VERTICES, UNIFORM_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_EMITTERS_EMITTERS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_EMITTERS_MATERIALS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_EMITTERS_CDF, STORAGE_BUFFER),
@@ -48,7 +48,7 @@ static const struct rb_pass_binding generate_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_VPLS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_VPL_VIEWS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_BUNDLE_VIEWS, STORAGE_BUFFER),
-    RB_PASS_BIND(RB_BIND_BDPT_GENERATE_VERTICES, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_BDPT_GENERATE_VERTICES, UNIFORM_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_EMITTERS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_MATERIALS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_GENERATE_SRGB_TEXTURES, COMBINED_IMAGE_SAMPLER),
@@ -280,7 +280,7 @@ void rb_pass_bdpt_emitters_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                   const struct rb_bdpt_frame *b)
 {
     struct rb_pass_bindings bind = {.pass = &p->emitters};
-    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_EMITTERS_VERTICES, &slot->vertices);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_EMITTERS_VERTICES, &slot->geometry);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_EMITTERS_EMITTERS, &b->emitters);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_EMITTERS_MATERIALS, &frame->materials);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_EMITTERS_CDF, &b->emitter_cdf);
@@ -307,7 +307,7 @@ void rb_pass_bdpt_generate_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_VPLS, &b->vpls);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_VPL_VIEWS, &b->vpl_views);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_BUNDLE_VIEWS, &b->bundle_views);
-    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_VERTICES, &slot->vertices);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_VERTICES, &slot->geometry);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_EMITTERS, &b->emitters);
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_GENERATE_MATERIALS, &frame->materials);
     rb_pass_bind_image(&bind, RB_BIND_BDPT_GENERATE_SRGB_TEXTURES, frame->srgb_textures.view,

@@ -19,8 +19,8 @@ struct rb_pass_gbuffer {
 
 static const struct rb_pass_binding bindings[] = {
     RB_PASS_BIND(RB_BIND_GBUFFER_GLOBALS, UNIFORM_BUFFER),
-    RB_PASS_BIND(RB_BIND_GBUFFER_VERTICES, STORAGE_BUFFER),
-    RB_PASS_BIND(RB_BIND_GBUFFER_PREV_VERTICES, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_GBUFFER_VERTICES, UNIFORM_BUFFER),
+    RB_PASS_BIND(RB_BIND_GBUFFER_PREV_VERTICES, UNIFORM_BUFFER),
     RB_PASS_BIND(RB_BIND_GBUFFER_MATERIALS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_GBUFFER_SRGB_TEXTURES, COMBINED_IMAGE_SAMPLER),
     RB_PASS_BIND(RB_BIND_GBUFFER_LINEAR_TEXTURES, COMBINED_IMAGE_SAMPLER),
@@ -94,8 +94,8 @@ void rb_pass_gbuffer_record(struct rb_pass_gbuffer *p, VkCommandBuffer cmd,
     };
     struct rb_pass_bindings b = {.pass = &p->pass};
     rb_pass_bind_buffer(&b, RB_BIND_GBUFFER_GLOBALS, &frame->globals);
-    rb_pass_bind_buffer(&b, RB_BIND_GBUFFER_VERTICES, &cur->vertices);
-    rb_pass_bind_buffer(&b, RB_BIND_GBUFFER_PREV_VERTICES, &prev->vertices);
+    rb_pass_bind_buffer(&b, RB_BIND_GBUFFER_VERTICES, &cur->geometry);
+    rb_pass_bind_buffer(&b, RB_BIND_GBUFFER_PREV_VERTICES, &prev->geometry);
     rb_pass_bind_buffer(&b, RB_BIND_GBUFFER_MATERIALS, &frame->materials);
     rb_pass_bind_image(&b, RB_BIND_GBUFFER_SRGB_TEXTURES, frame->srgb_textures.view,
                        p->pass.gpu->linear_sampler);

@@ -41,8 +41,8 @@ static const struct rb_pass_binding bindings[] = {
     RB_PASS_BIND(RB_BIND_HYBRID_BLOCKS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_HYBRID_BVH_NODES, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_HYBRID_BVH_TRIS, STORAGE_BUFFER),
-    RB_PASS_BIND(RB_BIND_HYBRID_VERTICES, STORAGE_BUFFER),
-    RB_PASS_BIND(RB_BIND_HYBRID_INDICES, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_HYBRID_VERTICES, UNIFORM_BUFFER),
+    RB_PASS_BIND(RB_BIND_HYBRID_INDICES, UNIFORM_BUFFER),
     RB_PASS_BIND(RB_BIND_HYBRID_MATERIALS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_HYBRID_SRGB_TEXTURES, COMBINED_IMAGE_SAMPLER),
     RB_PASS_BIND(RB_BIND_HYBRID_LINEAR_TEXTURES, COMBINED_IMAGE_SAMPLER),
@@ -131,9 +131,9 @@ static void bind(struct rb_pass *pass, VkCommandBuffer cmd, const struct rb_fram
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_QUEUE, &h->queue);
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_BLOCKS, &h->blocks);
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_BVH_NODES, &h->bvh_nodes);
-    rb_pass_bind_buffer(&b, RB_BIND_HYBRID_BVH_TRIS, &h->bvh_tris);
-    rb_pass_bind_buffer(&b, RB_BIND_HYBRID_VERTICES, &slot->vertices);
-    rb_pass_bind_buffer(&b, RB_BIND_HYBRID_INDICES, &h->indices);
+    rb_pass_bind_buffer_range(&b, RB_BIND_HYBRID_BVH_TRIS, &h->bvh_tris, 0, h->bvh_tri_bytes);
+    rb_pass_bind_buffer(&b, RB_BIND_HYBRID_VERTICES, &slot->geometry);
+    rb_pass_bind_buffer(&b, RB_BIND_HYBRID_INDICES, &h->table);
     rb_pass_bind_buffer(&b, RB_BIND_HYBRID_MATERIALS, &frame->materials);
     rb_pass_bind_image(&b, RB_BIND_HYBRID_SRGB_TEXTURES, frame->srgb_textures.view,
                        gpu->linear_sampler);

@@ -9,11 +9,14 @@
 #include "shared.h"
 #include "view_shared.h"
 #include "bdpt_shared.h"
+#include "geometry_shared.h"
 #include "hybrid_shared.h"
 
 _Static_assert(sizeof(struct rb_gpu_globals) == 400, "globals layout");
 _Static_assert(sizeof(struct rb_gpu_vertex) == 64, "vertex layout");
 _Static_assert(sizeof(struct rb_gpu_instance) == 160, "instance layout");
+_Static_assert(sizeof(struct rb_gpu_geometry) == 32, "geometry record layout (std140)");
+_Static_assert(sizeof(struct rb_gpu_hybrid_table) == 32, "hybrid table layout (std140)");
 _Static_assert(sizeof(struct rb_gpu_material) == 80, "material layout");
 _Static_assert(sizeof(struct rb_gpu_light) == 64, "light layout");
 _Static_assert(sizeof(struct rb_gpu_shadow_view) == 96, "shadow view layout");
@@ -47,7 +50,10 @@ struct rb_frame_slot {
     struct rb_gpu_buffer instances; /* struct rb_gpu_instance, host-visible */
     struct rb_gpu_buffer joints;    /* mat4, host-visible */
     struct rb_gpu_buffer weights;   /* float, host-visible */
-    struct rb_gpu_buffer vertices;  /* struct rb_gpu_vertex, written by animate */
+    struct rb_gpu_buffer vertices;  /* struct rb_gpu_vertex, written by animate; addressed */
+    /* struct rb_gpu_geometry, host-visible, written once: the addresses of vertices and of the
+     * frame's source vertices, morph deltas and indices, which the passes bind in their place */
+    struct rb_gpu_buffer geometry;
 };
 
 struct rb_frame {
@@ -55,6 +61,7 @@ struct rb_frame {
     struct rb_gpu_buffer globals; /* struct rb_gpu_globals, host-visible */
 
     /* static geometry and materials */
+    /* addressed (shaders/common/geometry_shared.h): read through each slot's geometry record */
     struct rb_gpu_buffer src_vertices; /* struct rb_scene_vertex */
     struct rb_gpu_buffer morph_deltas; /* struct rb_scene_morph_delta */
     struct rb_gpu_buffer indices;      /* uint32, into the world vertex buffers */
@@ -483,12 +490,18 @@ struct rb_hybrid_frame {
     struct rb_gpu_buffer counters; /* struct rb_gpu_hybrid_counters, host-visible */
     struct rb_gpu_buffer queue;    /* uint [queue capacity] */
     struct rb_gpu_buffer blocks;   /* uint per block of slots */
-    struct rb_gpu_buffer bvh_nodes, bvh_tris;
-    struct rb_gpu_buffer indices; /* the frame's triangles, then the BVH's coarser objects',
-                                   * the emitter list, the environment's importance table */
-    struct rb_gpu_buffer tiles;   /* float [2 x tiles] */
-    struct rb_gpu_image acc[2];   /* RB_HYBRID_ACC_LAYERS layers; frame f writes f mod 2 */
-    struct rb_gpu_image stats;    /* samples (diffuse, specular), tile mask */
+    struct rb_gpu_buffer bvh_nodes;
+    struct rb_gpu_buffer bvh_tris; /* the BVH's triangles, then the baked points and words;
+                                    * addressed (table), bound as far as the triangles */
+    VkDeviceSize bvh_tri_bytes;    /* the triangles' part of bvh_tris: the bound range */
+    struct rb_gpu_buffer indices;  /* the frame's triangles, then the BVH's coarser objects',
+                                    * the emitter list, the environment's importance table;
+                                    * host-visible, addressed (geometry_shared.h) */
+    struct rb_gpu_buffer table;    /* struct rb_gpu_hybrid_table: indices' and bvh_tris'
+                                    * addresses */
+    struct rb_gpu_buffer tiles;    /* float [2 x tiles] */
+    struct rb_gpu_image acc[2];    /* RB_HYBRID_ACC_LAYERS layers; frame f writes f mod 2 */
+    struct rb_gpu_image stats;     /* samples (diffuse, specular), tile mask */
     struct rb_gpu_image light[RB_BDPT_LIGHT_COUNT]; /* what the output pass textures */
     uint32_t cur;                                   /* the accumulator written: frame mod 2 */
     bool has_env_light;  /* the environment is lit: light samples of it (hybrid_light.comp) */

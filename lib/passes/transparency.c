@@ -19,7 +19,7 @@ struct rb_pass_transparency {
 
 static const struct rb_pass_binding bindings[] = {
     RB_PASS_BIND(RB_BIND_TRANSPARENCY_GLOBALS, UNIFORM_BUFFER),
-    RB_PASS_BIND(RB_BIND_TRANSPARENCY_VERTICES, STORAGE_BUFFER),
+    RB_PASS_BIND(RB_BIND_TRANSPARENCY_VERTICES, UNIFORM_BUFFER),
     RB_PASS_BIND(RB_BIND_TRANSPARENCY_MATERIALS, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_TRANSPARENCY_SRGB_TEXTURES, COMBINED_IMAGE_SAMPLER),
     RB_PASS_BIND(RB_BIND_TRANSPARENCY_LINEAR_TEXTURES, COMBINED_IMAGE_SAMPLER),
@@ -92,7 +92,7 @@ void rb_pass_transparency_record(struct rb_pass_transparency *p, VkCommandBuffer
     struct rb_pass_bindings b = {.pass = &p->pass};
     VkSampler linear = p->pass.gpu->linear_sampler;
     rb_pass_bind_buffer(&b, RB_BIND_TRANSPARENCY_GLOBALS, &frame->globals);
-    rb_pass_bind_buffer(&b, RB_BIND_TRANSPARENCY_VERTICES, &cur->vertices);
+    rb_pass_bind_buffer(&b, RB_BIND_TRANSPARENCY_VERTICES, &cur->geometry);
     rb_pass_bind_buffer(&b, RB_BIND_TRANSPARENCY_MATERIALS, &frame->materials);
     rb_pass_bind_image(&b, RB_BIND_TRANSPARENCY_SRGB_TEXTURES, frame->srgb_textures.view, linear);
     rb_pass_bind_image(&b, RB_BIND_TRANSPARENCY_LINEAR_TEXTURES, frame->linear_textures.view,

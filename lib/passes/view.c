@@ -47,7 +47,7 @@ const VkFormat rb_view_rsm_formats[RB_VIEW_RSM_TARGETS] = {
 };
 
 static const VkDescriptorType binding_types[RB_VIEW_BIND_COUNT] = {
-    [RB_VIEW_BIND_VERTICES] = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+    [RB_VIEW_BIND_VERTICES] = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
     [RB_VIEW_BIND_VIEWS] = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
     [RB_VIEW_BIND_MATERIALS] = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
     [RB_VIEW_BIND_SRGB_TEXTURES] = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
@@ -292,7 +292,7 @@ void rb_pass_view_record(struct rb_pass_view *p, VkCommandBuffer cmd, const stru
                                      .pLabelName = p->name,
                                  });
     struct writes w = {0};
-    put_buffer(&w, RB_VIEW_BIND_VERTICES, &slot->vertices);
+    put_buffer(&w, RB_VIEW_BIND_VERTICES, &slot->geometry);
     put_buffer(&w, RB_VIEW_BIND_VIEWS, batch->views);
     put_buffer(&w, RB_VIEW_BIND_MATERIALS, &frame->materials); /* view.vert drops blended ones */
     if (output != RB_VIEW_OUTPUT_DEPTH) {

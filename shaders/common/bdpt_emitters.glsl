@@ -1,6 +1,6 @@
 // The emissive triangles' weights, shared by bdpt_emitters.comp (their CDF) and
-// bdpt_generate.comp (the point on the one picked). Needs the buffers `vertices` (the frame's
-// world vertices), `emitters` and `materials` declared.
+// bdpt_generate.comp (the point on the one picked). Needs `geo` (the frame's slot's geometry
+// record, geometry_shared.h), and the buffers `emitters` and `materials` declared.
 
 float luminance(vec3 c)
 {
@@ -12,9 +12,9 @@ float luminance(vec3 c)
 float emitter_weight(uint e, out vec3 p0, out vec3 p1, out vec3 p2)
 {
     uvec4 t = emitters[e].tri;
-    p0 = vertices[t.x].position.xyz;
-    p1 = vertices[t.y].position.xyz;
-    p2 = vertices[t.z].position.xyz;
+    p0 = geo.vertices.v[t.x].position.xyz;
+    p1 = geo.vertices.v[t.y].position.xyz;
+    p2 = geo.vertices.v[t.z].position.xyz;
     float area = 0.5 * length(cross(p1 - p0, p2 - p0));
     return area * luminance(materials[t.w].emissive.rgb);
 }

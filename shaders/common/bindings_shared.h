@@ -6,17 +6,15 @@
 #define RB_SHADERS_BINDINGS_SHARED_H
 
 /* animate.comp */
-#define RB_BIND_ANIMATE_SRC_VERTICES 0 /* struct rb_scene_vertex, as floats */
-#define RB_BIND_ANIMATE_MORPH_DELTAS 1 /* struct rb_scene_morph_delta, as floats */
-#define RB_BIND_ANIMATE_INSTANCES 2
-#define RB_BIND_ANIMATE_JOINTS 3
-#define RB_BIND_ANIMATE_WEIGHTS 4
-#define RB_BIND_ANIMATE_VERTICES 5 /* written */
-#define RB_BIND_ANIMATE_COUNT 6
+#define RB_BIND_ANIMATE_GEOMETRY 0 /* the slot's record: its vertices written, the source read */
+#define RB_BIND_ANIMATE_INSTANCES 1
+#define RB_BIND_ANIMATE_JOINTS 2
+#define RB_BIND_ANIMATE_WEIGHTS 3
+#define RB_BIND_ANIMATE_COUNT 4
 
 /* gbuffer.vert and gbuffer.frag */
 #define RB_BIND_GBUFFER_GLOBALS 0
-#define RB_BIND_GBUFFER_VERTICES 1
+#define RB_BIND_GBUFFER_VERTICES 1      /* the slot's geometry record (geometry_shared.h) */
 #define RB_BIND_GBUFFER_PREV_VERTICES 2 /* the previous frame's, for motion vectors */
 #define RB_BIND_GBUFFER_MATERIALS 3
 #define RB_BIND_GBUFFER_SRGB_TEXTURES 4
@@ -56,7 +54,7 @@
 
 /* transparency.vert and transparency.frag: blended materials, lit as direct.comp lights a pixel */
 #define RB_BIND_TRANSPARENCY_GLOBALS 0
-#define RB_BIND_TRANSPARENCY_VERTICES 1
+#define RB_BIND_TRANSPARENCY_VERTICES 1 /* the slot's geometry record */
 #define RB_BIND_TRANSPARENCY_MATERIALS 2
 #define RB_BIND_TRANSPARENCY_SRGB_TEXTURES 3
 #define RB_BIND_TRANSPARENCY_LINEAR_TEXTURES 4
@@ -82,7 +80,7 @@
 #define RB_BIND_BDPT_GENERATE_VPLS 8         /* written */
 #define RB_BIND_BDPT_GENERATE_VPL_VIEWS 9    /* written */
 #define RB_BIND_BDPT_GENERATE_BUNDLE_VIEWS 10 /* written */
-#define RB_BIND_BDPT_GENERATE_VERTICES 11     /* the frame's world vertices */
+#define RB_BIND_BDPT_GENERATE_VERTICES 11     /* the frame's slot's geometry record */
 #define RB_BIND_BDPT_GENERATE_EMITTERS 12     /* rb_gpu_bdpt_emitter */
 #define RB_BIND_BDPT_GENERATE_MATERIALS 13
 #define RB_BIND_BDPT_GENERATE_SRGB_TEXTURES 14
@@ -95,7 +93,7 @@
 #define RB_BIND_BDPT_GENERATE_COUNT 21
 
 /* bdpt_emitters.comp: the emissive triangles' CDF by power */
-#define RB_BIND_BDPT_EMITTERS_VERTICES 0
+#define RB_BIND_BDPT_EMITTERS_VERTICES 0 /* the slot's geometry record */
 #define RB_BIND_BDPT_EMITTERS_EMITTERS 1
 #define RB_BIND_BDPT_EMITTERS_MATERIALS 2
 #define RB_BIND_BDPT_EMITTERS_CDF 3 /* written */
@@ -164,7 +162,7 @@
 #define RB_BIND_REPROJECT_GLOBALS 0
 #define RB_BIND_REPROJECT_HISTORY 1  /* rb_gpu_bdpt_history */
 #define RB_BIND_REPROJECT_OUT 2      /* written: a layer per age */
-#define RB_BIND_REPROJECT_VERTICES 3 /* RB_BDPT_MAX_CACHES: frame f - a's world vertices */
+#define RB_BIND_REPROJECT_VERTICES 3 /* RB_BDPT_MAX_CACHES: frame f - a's geometry record */
 #define RB_BIND_REPROJECT_COUNT 11
 
 /* bdpt_reconstruct.comp: equation (1) over the caches */
@@ -212,8 +210,8 @@
 #define RB_BIND_HYBRID_BLOCKS 16   /* queued rays per block of slots, then their prefix sums */
 #define RB_BIND_HYBRID_BVH_NODES 17
 #define RB_BIND_HYBRID_BVH_TRIS 18 /* the triangles, then the baked points (hybrid_shared.h) */
-#define RB_BIND_HYBRID_VERTICES 19 /* this frame's world vertices */
-#define RB_BIND_HYBRID_INDICES 20
+#define RB_BIND_HYBRID_VERTICES 19 /* this frame's slot's geometry record */
+#define RB_BIND_HYBRID_INDICES 20 /* a geometry record: .indices the triangles, emitters, sky */
 #define RB_BIND_HYBRID_MATERIALS 21
 #define RB_BIND_HYBRID_SRGB_TEXTURES 22
 #define RB_BIND_HYBRID_LINEAR_TEXTURES 23

@@ -9,6 +9,7 @@
 #include "bdpt_shared.h"
 #include "hybrid_shared.h"
 #include "bvh_shared.h"
+#include "geometry_shared.h"
 #include "brdf.glsl"
 #include "encode.glsl"
 #include "lights.glsl"
@@ -32,13 +33,14 @@ layout(std430, binding = RB_BIND_HYBRID_COUNTERS) buffer Counters { rb_gpu_hybri
 layout(std430, binding = RB_BIND_HYBRID_QUEUE) buffer Queue { uint queue[]; };
 layout(std430, binding = RB_BIND_HYBRID_BLOCKS) buffer Blocks { uint blocks[]; };
 layout(std430, binding = RB_BIND_HYBRID_BVH_NODES) readonly buffer BvhNodes { rb_gpu_bvh_node bvh_nodes[]; };
+// Bound as far as the BVH's triangles; the baked points and words that follow them, which grow
+// with the scene's triangles, are read by the buffer's address (table.bake, table.bake_words).
 layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer BvhTris { rb_gpu_bvh_triangle bvh_tris[]; };
-// The same buffer as vec4s: the baked points follow the triangles (the push descriptor set has
-// no binding to spare for them).
-layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer Bake { vec4 bake[]; };
-layout(std430, binding = RB_BIND_HYBRID_BVH_TRIS) readonly buffer BakeWords { uint bake_words[]; };
-layout(std430, binding = RB_BIND_HYBRID_VERTICES) readonly buffer Verts { rb_gpu_vertex verts[]; };
-layout(std430, binding = RB_BIND_HYBRID_INDICES) readonly buffer Indices { uint indices[]; };
+// The world vertices, the triangles' indices followed by the emitter and sky tables, and the
+// bake, by their device addresses (geometry_shared.h: no binding's range bounds them):
+// vertex_at, index_at, baked_point and bake_word below.
+layout(std140, binding = RB_BIND_HYBRID_VERTICES) uniform Geometry { rb_gpu_geometry geo; };
+layout(std140, binding = RB_BIND_HYBRID_INDICES) uniform Table { rb_gpu_hybrid_table table; };
 layout(std430, binding = RB_BIND_HYBRID_MATERIALS) readonly buffer Materials { rb_gpu_material materials[]; };
 layout(binding = RB_BIND_HYBRID_SRGB_TEXTURES) uniform sampler2DArray srgb_textures;
 layout(binding = RB_BIND_HYBRID_LINEAR_TEXTURES) uniform sampler2DArray linear_textures;
@@ -53,6 +55,26 @@ layout(binding = RB_BIND_HYBRID_LIGHT + RB_BDPT_INDIRECT_SPECULAR, rgba32f) unif
 
 layout(push_constant) uniform Push { rb_gpu_hybrid_push pc; };
 
+rb_gpu_vertex vertex_at(uint i)
+{
+    return geo.vertices.v[i];
+}
+
+uint index_at(uint i)
+{
+    return table.indices.u[i];
+}
+
+vec4 baked_point(uint i)
+{
+    return table.bake.v[i];
+}
+
+uint bake_word(uint i)
+{
+    return table.bake_words.u[i];
+}
+
 #include "shadow.glsl"
 #include "punctual.glsl"
 
@@ -61,7 +83,7 @@ layout(push_constant) uniform Push { rb_gpu_hybrid_push pc; };
 // which are no occluders (the transparency pass draws them over the frame).
 bool rb_hybrid_bvh_filter(uint t, vec2 bary)
 {
-    rb_gpu_vertex v0 = verts[indices[3u * t]];
+    rb_gpu_vertex v0 = vertex_at(index_at(3u * t));
     rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
     if (m.params.z < 0.0)
         return false;
@@ -69,8 +91,8 @@ bool rb_hybrid_bvh_filter(uint t, vec2 bary)
         return true;
     float a = m.base_color.a;
     if (m.textures.x >= 0) {
-        vec2 uv = (1.0 - bary.x - bary.y) * v0.uv.xy + bary.x * verts[indices[3u * t + 1u]].uv.xy +
-                  bary.y * verts[indices[3u * t + 2u]].uv.xy;
+        vec2 uv = (1.0 - bary.x - bary.y) * v0.uv.xy + bary.x * vertex_at(index_at(3u * t + 1u)).uv.xy +
+                  bary.y * vertex_at(index_at(3u * t + 2u)).uv.xy;
         a *= textureLod(srgb_textures, vec3(uv, float(m.textures.x)), 0.0).a;
     }
     return a >= m.params.z;
@@ -271,7 +293,7 @@ float rb_hybrid_light_pdf(rb_gpu_material m, float dist, float cos_l)
 // The environment's light samples (DESIGN.md "hybrid", rays), as the reference takes them
 // (lib/reference/lights.c): with a map, by the importance table of its texels (each the largest
 // luminance of its 3 x 3 neighbourhood times sin(theta)), which lib/integrators/hybrid.c writes
-// into `indices` after the emitter list: the marginal CDF over rows (h + 1), each row's CDF
+// into the index table (index_at) after the emitter list: the marginal CDF over rows (h + 1), each row's CDF
 // (w + 1 a row), then each texel's probability (w h), as float bits; without a map, cosine-
 // weighted around the shading normal. None when the environment is black (rb_hybrid_env_lit).
 bool rb_hybrid_env_lit()
@@ -287,7 +309,7 @@ uint rb_hybrid_env_table()
 
 float rb_hybrid_table(uint i)
 {
-    return uintBitsToFloat(indices[i]);
+    return uintBitsToFloat(index_at(i));
 }
 
 // The reference's search: the last i in [0, n) with cdf[i] <= u, skipping empty intervals.
@@ -367,10 +389,10 @@ float rb_hybrid_emit_weight(uint t, vec3 l, float dist, float pdf_brdf)
 {
     if (pc.bake.w == 0u)
         return 1.0;
-    rb_gpu_vertex v0 = verts[indices[3u * t]];
+    rb_gpu_vertex v0 = vertex_at(index_at(3u * t));
     rb_gpu_material m = materials[floatBitsToUint(v0.uv.z)];
-    vec3 ne = cross(verts[indices[3u * t + 1u]].position.xyz - v0.position.xyz,
-                    verts[indices[3u * t + 2u]].position.xyz - v0.position.xyz);
+    vec3 ne = cross(vertex_at(index_at(3u * t + 1u)).position.xyz - v0.position.xyz,
+                    vertex_at(index_at(3u * t + 2u)).position.xyz - v0.position.xyz);
     float len = length(ne);
     float cos_l = len > 0.0 ? abs(dot(ne / len, l)) : 0.0;
     return rb_hybrid_mis(pdf_brdf, rb_hybrid_light_pdf(m, dist, cos_l));
@@ -417,13 +439,13 @@ vec3 rb_hybrid_baked(uint word, vec2 bary, bool back)
     if (f.x + f.y <= 1.0 || i0.x + i0.y + 2u > r) {
         vec3 w = max(vec3(1.0 - f.x - f.y, f.x, f.y), vec3(0.0));
         w /= max(w.x + w.y + w.z, 1e-6);
-        return w.x * bake[rb_bake_point(base, r, i0.x, i0.y)].rgb +
-               w.y * bake[rb_bake_point(base, r, i0.x + 1u, i0.y)].rgb +
-               w.z * bake[rb_bake_point(base, r, i0.x, i0.y + 1u)].rgb;
+        return w.x * baked_point(rb_bake_point(base, r, i0.x, i0.y)).rgb +
+               w.y * baked_point(rb_bake_point(base, r, i0.x + 1u, i0.y)).rgb +
+               w.z * baked_point(rb_bake_point(base, r, i0.x, i0.y + 1u)).rgb;
     }
-    return (f.x + f.y - 1.0) * bake[rb_bake_point(base, r, i0.x + 1u, i0.y + 1u)].rgb +
-           (1.0 - f.x) * bake[rb_bake_point(base, r, i0.x, i0.y + 1u)].rgb +
-           (1.0 - f.y) * bake[rb_bake_point(base, r, i0.x + 1u, i0.y)].rgb;
+    return (f.x + f.y - 1.0) * baked_point(rb_bake_point(base, r, i0.x + 1u, i0.y + 1u)).rgb +
+           (1.0 - f.x) * baked_point(rb_bake_point(base, r, i0.x, i0.y + 1u)).rgb +
+           (1.0 - f.y) * baked_point(rb_bake_point(base, r, i0.x + 1u, i0.y)).rgb;
 }
 
 // The baked light at a surface point the camera sees (a screen hit): p is the G-buffer's point,
@@ -446,11 +468,11 @@ vec3 rb_hybrid_baked_at(vec3 p, vec3 ng, float depth, float tri, bool back)
         return rb_hybrid_baked(hit.extra, hit.bary, back);
     }
     uint t = uint(tri);
-    uint word = bake_words[pc.bake.z + t];
+    uint word = bake_word(pc.bake.z + t);
     if (word == 0u)
         return vec3(0.0);
-    vec3 p0 = verts[indices[3u * t]].position.xyz, p1 = verts[indices[3u * t + 1u]].position.xyz,
-         p2 = verts[indices[3u * t + 2u]].position.xyz;
+    vec3 p0 = vertex_at(index_at(3u * t)).position.xyz, p1 = vertex_at(index_at(3u * t + 1u)).position.xyz,
+         p2 = vertex_at(index_at(3u * t + 2u)).position.xyz;
     // Barycentrics of p's projection into the triangle's plane.
     vec3 e1 = p1 - p0, e2 = p2 - p0, q = p - p0;
     float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2);
@@ -536,8 +558,8 @@ void rb_hybrid_bvh_surface(vec3 o, vec3 d, rb_bvh_hit hit, out vec3 p, out vec3 
                            out bool front, out rb_surface sf)
 {
     uint t = hit.triangle;
-    rb_gpu_vertex v0 = verts[indices[3u * t]], v1 = verts[indices[3u * t + 1u]],
-                  v2 = verts[indices[3u * t + 2u]];
+    rb_gpu_vertex v0 = vertex_at(index_at(3u * t)), v1 = vertex_at(index_at(3u * t + 1u)),
+                  v2 = vertex_at(index_at(3u * t + 2u));
     vec3 b = vec3(1.0 - hit.bary.x - hit.bary.y, hit.bary);
     ng = normalize(cross(v1.position.xyz - v0.position.xyz, v2.position.xyz - v0.position.xyz));
     n = normalize(b.x * v0.normal.xyz + b.y * v1.normal.xyz + b.z * v2.normal.xyz);

@@ -20,7 +20,7 @@
 #define RB_VIEW_PARABOLOID 3
 
 /* The view pass's one descriptor set (push descriptors): each output binds what it reads. */
-#define RB_VIEW_BIND_VERTICES 0        /* rb_gpu_vertex, world space (all) */
+#define RB_VIEW_BIND_VERTICES 0        /* the slot's geometry record (all) */
 #define RB_VIEW_BIND_VIEWS 1           /* rb_gpu_view (all) */
 #define RB_VIEW_BIND_MATERIALS 2       /* rb_gpu_material (all: blended ones are in no view) */
 #define RB_VIEW_BIND_SRGB_TEXTURES 3   /* sampler2DArray (rsm, list) */

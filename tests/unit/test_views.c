@@ -161,17 +161,25 @@ static void check_ok(enum rb_status st, const struct rb_err *err)
         fail_msg("%s", err->msg);
 }
 
-static void make_buffer(struct rb_gpu *gpu, VkDeviceSize size, VkBufferUsageFlags usage,
-                        const char *name, struct rb_gpu_buffer *out)
+/* A host-visible buffer; addressed ones are read by device address (geometry_shared.h). */
+static void make_buffer_at(struct rb_gpu *gpu, VkDeviceSize size, VkBufferUsageFlags usage,
+                           bool is_addressed, const char *name, struct rb_gpu_buffer *out)
 {
     struct rb_err err = RB_ERR_INIT;
     check_ok(rb_gpu_buffer_init(gpu,
                                 &(struct rb_gpu_buffer_desc){.size_bytes = size,
                                                              .usage = usage,
                                                              .is_host_visible = true,
+                                                             .is_addressed = is_addressed,
                                                              .debug_name = name},
                                 out, &err),
              &err);
+}
+
+static void make_buffer(struct rb_gpu *gpu, VkDeviceSize size, VkBufferUsageFlags usage,
+                        const char *name, struct rb_gpu_buffer *out)
+{
+    make_buffer_at(gpu, size, usage, false, name, out);
 }
 
 static void image_to_general(struct rb_gpu *gpu, struct rb_gpu_image *img)
@@ -212,10 +220,16 @@ static void upload(struct gpu_scene *g, const struct scene *s, float albedo)
     f->slots = &g->slot;
     f->slot_count = 1;
     uint32_t nv = 4 * (uint32_t)s->count, ni = 6 * (uint32_t)s->count;
-    make_buffer(gpu, nv * sizeof(struct rb_gpu_vertex), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                "vertices", &f->slots[0].vertices);
-    make_buffer(gpu, ni * sizeof(uint32_t), VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "indices",
-                &f->indices);
+    make_buffer_at(gpu, nv * sizeof(struct rb_gpu_vertex), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
+                   "vertices", &f->slots[0].vertices);
+    make_buffer_at(gpu, ni * sizeof(uint32_t), VK_BUFFER_USAGE_INDEX_BUFFER_BIT, true, "indices",
+                   &f->indices);
+    make_buffer(gpu, sizeof(struct rb_gpu_geometry), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, "geometry",
+                &f->slots[0].geometry);
+    memcpy(f->slots[0].geometry.mapped,
+           &(struct rb_gpu_geometry){.vertices = f->slots[0].vertices.address,
+                                     .indices = f->indices.address},
+           sizeof(struct rb_gpu_geometry));
     struct rb_gpu_vertex *v = f->slots[0].vertices.mapped;
     uint32_t *idx = f->indices.mapped;
     uint32_t material = 0;
@@ -265,6 +279,7 @@ static void release(struct gpu_scene *g)
     rb_gpu_image_release(g->gpu, &f->srgb_textures);
     rb_gpu_buffer_release(g->gpu, &f->materials);
     rb_gpu_buffer_release(g->gpu, &f->indices);
+    rb_gpu_buffer_release(g->gpu, &f->slots[0].geometry);
     rb_gpu_buffer_release(g->gpu, &f->slots[0].vertices);
 }
 
