@@ -6,8 +6,8 @@
 # integrator's figures (tests/bench-bdpt.sh, which says what they are), its temporal caches'
 # (tests/bench-temporal.sh) and the hybrid integrator's (tests/bench-hybrid.sh); and the CPU time
 # of HDR-FLIP on a 1920x1080 pair, on one core (tests/bench-flip.sh); then each integrator's time
-# and peak memory on a generated scene of 1 M triangles, and of 10 M with RB_BENCH_10M=1
-# (tests/bench-scale.sh).
+# and peak memory on a generated scene of 1 M triangles, and of 10 M (tests/bench-scale.sh;
+# RB_BENCH_10M=0 leaves that out).
 set -eu
 BUILD=${BUILD:-build}
 . tests/bench-lib.sh
