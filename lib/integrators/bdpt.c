@@ -454,6 +454,7 @@ static enum rb_status create(struct rb_integrator *it, void **state, struct rb_e
         .filter_radius_px = job->filter_radius_px,
         .filter_depth = job->filter_depth,
         .filter_normal = job->filter_normal,
+        .filter_light = job->filter_light,
         .clamp_g = job->clamp / (diag * diag),
         .vpl_bias = job->vpl_bias,
         .min_roughness = job->min_roughness,

@@ -220,6 +220,9 @@ static const struct key keys[] = {
       0,
       "bdpt: cosine between normals below which the filter stops and a cache sample is not the "
       "pixel's surface"),
+    K("integrator.bdpt.filter_light", KT_FLOAT, JOB(integrator.bdpt.filter_light), 0, 1, "0.5", 0,
+      "bdpt: the least ratio of two pixels' direct light at which the filter still joins them (it "
+      "stops at shadow edges); 0: it never stops for light"),
     K("integrator.bdpt.clamp", KT_FLOAT, JOB(integrator.bdpt.clamp), 0, NOHI, "100", 0,
       "bdpt: bound on the geometry term of the VPLs' connections (with mis, on it times the VPL's "
       "weight), in units of one over the scene diagonal squared; 0: no clamp"),
@@ -1455,6 +1458,7 @@ void rb_job_rehash(struct rb_job *job)
         h = h_u32(h, b->filter_radius_px);
         h = h_f32(h, b->filter_depth);
         h = h_f32(h, b->filter_normal);
+        h = h_f32(h, b->filter_light);
         h = h_f32(h, b->clamp);
         h = h_f32(h, b->vpl_bias);
         h = h_f32(h, b->min_roughness);

@@ -170,6 +170,7 @@ struct rb_job {
             uint32_t filter_radius_px; /* geometry-aware filter, default 4 */
             float filter_depth;        /* relative depth difference that stops it, default 0.05 */
             float filter_normal;       /* cosine between normals below which it stops, 0.9 */
+            float filter_light;        /* least ratio of two pixels' direct light it joins, 0.5 */
             float clamp;               /* bound on G(z1, z2) of two-bounce paths, times the
                                         * scene's diagonal squared; 0: none; default 100 */
             float vpl_bias;            /* VPL shadow-map depth bias, fraction of distance */

@@ -244,6 +244,7 @@ static struct rb_gpu_bdpt_image_push image_push(const struct rb_bdpt_frame *b)
     return (struct rb_gpu_bdpt_image_push){
         .split = {n, b->sub_width_px, b->sub_height_px, h},
         .stops = {b->filter_depth, b->filter_normal, (float)rd, (float)active},
+        .light = {b->filter_light, 0.0f, 0.0f, 0.0f},
     };
 }
 

@@ -34,7 +34,7 @@ _Static_assert(sizeof(struct rb_gpu_bdpt_generate_push) == 48, "generate push co
 _Static_assert(sizeof(struct rb_gpu_bdpt_connect_push) == 96, "connect push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_bounce_push) == 48, "bounce push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_emitters_push) == 16, "emitters push constants");
-_Static_assert(sizeof(struct rb_gpu_bdpt_image_push) == 32, "split/gather/filter push constants");
+_Static_assert(sizeof(struct rb_gpu_bdpt_image_push) == 48, "split/gather/filter push constants");
 _Static_assert(sizeof(struct rb_gpu_hybrid_slot) == 32, "hybrid ray slot layout");
 _Static_assert(sizeof(struct rb_gpu_hybrid_counters) == 64, "hybrid counters layout");
 _Static_assert(sizeof(struct rb_gpu_hybrid_push) == 128, "hybrid push constants: the least limit");
@@ -379,6 +379,7 @@ struct rb_bdpt_frame {
     uint32_t bounce_vpl_size_px; /* the bounce VPLs' maps: a corner of their vpl_maps layers */
     uint32_t filter_radius_px;
     float filter_depth, filter_normal;
+    float filter_light;  /* the least ratio of two pixels' direct light the filter joins; 0: any */
     float clamp_g;       /* the bound on G of a VPL connection, in 1/m^2; 0: none */
     float vpl_bias;      /* fraction of the distance */
     float min_roughness; /* the least roughness at a VPL and a bundle's hit (bdpt_vpl.glsl) */

@@ -160,6 +160,8 @@ struct rb_gpu_bdpt_image_push {
     RB_VEC4(stops);   /* depth threshold, normal threshold, the box radius for direct light
                        * (n / 2, one interleave block; 0: no filter), the sub-images that saw
                        * samples (the first min(n^2, max(K_v, K_b))) */
+    RB_VEC4(light);   /* the filter's light stop: the least ratio of two pixels' direct light
+                       * (0: none) */
 };
 
 /* ---- the MIS weights (BDPT.md "As implemented"), one definition for GLSL and C: the connect
