@@ -130,6 +130,24 @@ $images"meshes": [{"name": "Floor", "primitives": [{"attributes": {"POSITION": 0
 GLTF
 }
 
+# late_chunk_same JOB LAST WHAT [ARGS...]: the frames LAST-4 to LAST rendered alone on one
+# thread have the bits of the same frames of a whole run 0-LAST on four (checked at LAST-4, LAST-2
+# and LAST): a chunk's warm-up rebuilds all the state its frames read. WHAT names the shot.
+late_chunk_same() {
+    _job=$1 _last=$2 _what=$3
+    shift 3
+    _first=$((_last - 4))
+    LP_NUM_THREADS=4 rb render "$_job" -q "$@" --frames "0-$_last" --out "$T/whole"
+    expect_exit 0 "frames 0-$_last of $_what"
+    LP_NUM_THREADS=1 rb render "$_job" -q "$@" --frames "$_first-$_last" --out "$T/late"
+    expect_exit 0 "the chunk $_first-$_last alone, on one thread"
+    for _f in "$_first" $((_first + 2)) "$_last"; do
+        _name=$(printf 'frame.%04d.exr' "$_f")
+        check "frame $_f of the late chunk has the whole run's bits (1 and 4 threads)" \
+            cmp -s "$T/whole/$_name" "$T/late/$_name"
+    done
+}
+
 fail_all() {
     not_ok "$1"
     done_testing

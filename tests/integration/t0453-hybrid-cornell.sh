@@ -89,16 +89,7 @@ check "so frame 31 requests fewer rays than frame 8 ($r31 < $r8)" test "$r31" -l
 # ---- a chunk late in the still shot ----------------------------------------------------------
 
 # W = 16 so that the chunk's warm-up (16 frames) starts long after the shot's first frame.
-small="-q --size 64x36 --set integrator.hybrid.history=16"
-# shellcheck disable=SC2086
-LP_NUM_THREADS=4 rb render "$T/box.yaml" $small --frames 0-59 --out "$T/whole"
-expect_exit 0 "60 frames of the still box at 64x36, W = 16"
-# shellcheck disable=SC2086
-LP_NUM_THREADS=1 rb render "$T/box.yaml" $small --frames 55-59 --out "$T/late"
-expect_exit 0 "the chunk 55-59 alone, on one thread"
-for f in 0055 0057 0059; do
-    check "frame $f of the late chunk has the whole run's bits (1 and 4 threads)" \
-        cmp -s "$T/whole/frame.$f.exr" "$T/late/frame.$f.exr"
-done
+late_chunk_same "$T/box.yaml" 59 "the still box at 64x36, W = 16" --size 64x36 \
+    --set integrator.hybrid.history=16
 
 done_testing

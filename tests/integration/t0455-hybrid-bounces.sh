@@ -90,16 +90,7 @@ check "the second bounce adds the reference's share of indirect light ($hi / $ri
 
 # ---- a chunk late in the still shot ----------------------------------------------------------
 
-small="-q --size 64x36 --set integrator.hybrid.history=16 --set integrator.hybrid.max_bounces=2"
-# shellcheck disable=SC2086
-LP_NUM_THREADS=4 rb render "$T/box.yaml" $small --frames 0-39 --out "$T/whole"
-expect_exit 0 "40 frames of the still box at 64x36, W = 16, 2 bounces"
-# shellcheck disable=SC2086
-LP_NUM_THREADS=1 rb render "$T/box.yaml" $small --frames 35-39 --out "$T/late"
-expect_exit 0 "the chunk 35-39 alone, on one thread"
-for f in 0035 0037 0039; do
-    check "frame $f of the late chunk has the whole run's bits (1 and 4 threads)" \
-        cmp -s "$T/whole/frame.$f.exr" "$T/late/frame.$f.exr"
-done
+late_chunk_same "$T/box.yaml" 39 "the still box at 64x36, W = 16, 2 bounces" --size 64x36 \
+    --set integrator.hybrid.history=16 --set integrator.hybrid.max_bounces=2
 
 done_testing
