@@ -572,7 +572,8 @@ static enum rb_status create(struct rb_integrator *it, void **state, struct rb_e
     d->bvh_epoch = INT64_MIN;
     enum rb_status st;
     if ((st = rb_base_create(it, &d->base, err)) ||
-        (st = rb_pass_hybrid_create(it->gpu, &d->passes, err)) ||
+        (st = rb_pass_hybrid_create(
+             it->gpu, !d->settings->feedback && d->settings->max_bounces >= 2, &d->passes, err)) ||
         (st = geometry_init(it, d, err)) || (st = emitters_init(it, d, err)) ||
         (st = env_init(it, d, err)) || (st = bake_init(it, d, err)) ||
         (st = create_resources(it, d, err)) || (st = worker_start(d, err))) {

@@ -9,6 +9,7 @@
 
 #include "hybrid_accumulate.comp.h"
 #include "hybrid_bvh.comp.h"
+#include "hybrid_bvh_chain.comp.h"
 #include "hybrid_emitters.comp.h"
 #include "hybrid_filter.comp.h"
 #include "hybrid_hiz.comp.h"
@@ -16,6 +17,7 @@
 #include "hybrid_queue.comp.h"
 #include "hybrid_tiles.comp.h"
 #include "hybrid_trace.comp.h"
+#include "hybrid_trace_chain.comp.h"
 
 struct rb_pass_hybrid {
     struct rb_pass hiz, emitters, trace, queue, bvh, light, accumulate, tiles, filter;
@@ -57,17 +59,22 @@ static const struct rb_pass_binding bindings[] = {
 };
 _Static_assert(COUNT(bindings) == RB_BIND_HYBRID_COUNT, "hybrid bindings");
 
-#define COMPUTE(field, spv_name)                                                                   \
+#define COMPUTE_SPV(field, code, code_bytes)                                                       \
     rb_pass_compute_init(                                                                          \
         gpu,                                                                                       \
         &(struct rb_pass_compute_desc){.name = "hybrid_" #field,                                   \
                                        RB_PASS_BINDINGS(bindings),                                 \
                                        .push_bytes = sizeof(struct rb_gpu_hybrid_push),            \
-                                       .spv = (spv_name),                                          \
-                                       .spv_bytes = sizeof(spv_name)},                             \
+                                       .spv = (code),                                              \
+                                       .spv_bytes = (code_bytes)},                                 \
         &p->field, err)
+#define COMPUTE(field, spv_name) COMPUTE_SPV(field, spv_name, sizeof(spv_name))
+/* The plain or the chain variant of a rays' pass (rb_pass_hybrid_create). */
+#define COMPUTE_RAYS(field, plain, with_chain)                                                     \
+    (chain ? COMPUTE_SPV(field, with_chain, sizeof(with_chain))                                    \
+           : COMPUTE_SPV(field, plain, sizeof(plain)))
 
-enum rb_status rb_pass_hybrid_create(struct rb_gpu *gpu, struct rb_pass_hybrid **out,
+enum rb_status rb_pass_hybrid_create(struct rb_gpu *gpu, bool chain, struct rb_pass_hybrid **out,
                                      struct rb_err *err)
 {
     struct rb_pass_hybrid *p = calloc(1, sizeof(*p));
@@ -75,9 +82,9 @@ enum rb_status rb_pass_hybrid_create(struct rb_gpu *gpu, struct rb_pass_hybrid *
         return rb_errf(err, RB_E_NOMEM, "out of memory");
     enum rb_status st;
     if ((st = COMPUTE(hiz, rb_spv_hybrid_hiz_comp)) ||
-        (st = COMPUTE(trace, rb_spv_hybrid_trace_comp)) ||
+        (st = COMPUTE_RAYS(trace, rb_spv_hybrid_trace_comp, rb_spv_hybrid_trace_chain_comp)) ||
         (st = COMPUTE(queue, rb_spv_hybrid_queue_comp)) ||
-        (st = COMPUTE(bvh, rb_spv_hybrid_bvh_comp)) ||
+        (st = COMPUTE_RAYS(bvh, rb_spv_hybrid_bvh_comp, rb_spv_hybrid_bvh_chain_comp)) ||
         (st = COMPUTE(emitters, rb_spv_hybrid_emitters_comp)) ||
         (st = COMPUTE(light, rb_spv_hybrid_light_comp)) ||
         (st = COMPUTE(accumulate, rb_spv_hybrid_accumulate_comp)) ||

@@ -511,7 +511,9 @@ struct rb_hybrid_frame {
 };
 
 struct rb_pass_hybrid;
-enum rb_status rb_pass_hybrid_create(struct rb_gpu *gpu, struct rb_pass_hybrid **out,
+/* chain: the rays' passes that trace a counted path's further bounces (max_bounces 2 to 8;
+ * hybrid_trace_chain.comp and hybrid_bvh_chain.comp), which the other counts never run. */
+enum rb_status rb_pass_hybrid_create(struct rb_gpu *gpu, bool chain, struct rb_pass_hybrid **out,
                                      struct rb_err *err);
 void rb_pass_hybrid_destroy(struct rb_pass_hybrid *p);
 /* The hybrid frame's compute passes, in the order they run (lib/integrators/hybrid.c records
