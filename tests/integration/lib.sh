@@ -130,6 +130,12 @@ $images"meshes": [{"name": "Floor", "primitives": [{"attributes": {"POSITION": 0
 GLTF
 }
 
+# relmse A B [LAYER]: raybundle compare's relMSE of A against B (LAYER's, or the beauty's).
+relmse() {
+    "$RB" compare "$1" "$2" ${3:+--layer "$3"} --json |
+        sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p' | head -n 1
+}
+
 # late_chunk_same JOB LAST WHAT [ARGS...]: the frames LAST-4 to LAST rendered alone on one
 # thread have the bits of the same frames of a whole run 0-LAST on four (checked at LAST-4, LAST-2
 # and LAST): a chunk's warm-up rebuilds all the state its frames read. WHAT names the shot.

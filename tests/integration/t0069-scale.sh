@@ -44,10 +44,6 @@ expect_exit 0 "the reference renders its direct path space"
 rb reference "$job" --spp 64 --out "$T/ref" -q
 expect_exit 0 "the reference renders every path"
 
-# relmse A B: the relMSE of A's beauty against B's.
-relmse() {
-    "$RB" compare "$1" "$2" --json | sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p'
-}
 # The light above leaves no shadow on the terrain, so the direct integrator's shading is the
 # reference's direct light (measured: relMSE 1.2e-7); bdpt and hybrid add the little light the
 # slopes exchange, within the noise of one frame and of 64 samples (measured 1.1e-4, 2.6e-4).

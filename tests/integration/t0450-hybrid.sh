@@ -11,10 +11,6 @@ below() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 < b + 0) }'; }
 counts() {
     sed -n 's/.*"ray_counts": {"requested": \([0-9]*\), "screen_hits": \([0-9]*\), "queued": \([0-9]*\), "bvh_hits": \([0-9]*\), "misses": \([0-9]*\), "dropped": \([0-9]*\)}.*/\1 \2 \3 \4 \5 \6/p' "$1"
 }
-relmse() { # relmse A B LAYER
-    "$RB" compare "$1" "$2" --layer "$3" --json | sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p' |
-        head -n 1
-}
 
 # The demo room, its animation stopped and its camera still; its hits lit by direct light alone
 # (feedback off), to be held to the reference with one bounce.

@@ -9,10 +9,6 @@
 SAME="$BUILD/tests/tools/samebits"
 same() { "$SAME" "$1" "$2" >/dev/null; }
 below() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 < b + 0) }'; }
-relmse() { # relmse A B LAYER
-    "$RB" compare "$1" "$2" --layer "$3" --json | sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p' |
-        head -n 1
-}
 # screen_check FILE: "checked agreed" of a timing sidecar
 screen_check() {
     sed -n 's/.*"screen_check": {"checked": \([0-9]*\), "agreed": \([0-9]*\)}.*/\1 \2/p' "$1"

@@ -15,10 +15,6 @@ if ! have_scene "$scene"; then
 fi
 below() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 <= b + 0) }'; }
 under() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 < b + 0) }'; }
-relmse() { # relmse A B LAYER
-    "$RB" compare "$1" "$2" --layer "$3" --json | sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p' |
-        head -n 1
-}
 cat >"$T/box.yaml" <<EOT
 scene: $(cd "$SCENES/cornell-box" && pwd)/CornellBox.glb
 output: frame.####.exr

@@ -8,10 +8,6 @@
 . tests/integration/lib.sh
 
 below() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 <= b + 0) }'; }
-relmse() { # relmse A B LAYER
-    "$RB" compare "$1" "$2" --layer "$3" --json | sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p' |
-        head -n 1
-}
 mean() { # mean EXR CHANNEL
     oiiotool "$1" --ch "$2" --printstats 2>/dev/null | sed -n 's/^ *Stats Avg: \(.*\) (float)$/\1/p'
 }

@@ -16,10 +16,6 @@ below() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 <= b + 0) }'; }
 # closer A B F: A is at most B / F (the matching pair's error against the mismatched one's)
 closer() { awk -v a="$1" -v b="$2" -v f="$3" 'BEGIN { exit !(a + 0 > 0 && a * f <= b + 0) }'; }
 within() { awk -v a="$1" -v lo="$2" -v hi="$3" 'BEGIN { exit !(a + 0 >= lo && a + 0 <= hi) }'; }
-relmse() { # relmse A B LAYER
-    "$RB" compare "$1" "$2" --layer "$3" --json | sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p' |
-        head -n 1
-}
 indirect_lum() { # the indirect layer's mean luminance
     oiiotool "$1" --ch indirect.R,indirect.G,indirect.B --printstats 2>/dev/null |
         sed -n 's/^ *Stats Avg: \([0-9.e+-]*\) \([0-9.e+-]*\) \([0-9.e+-]*\) .*/\1 \2 \3/p' |

@@ -12,9 +12,6 @@
 SAME="$BUILD/tests/tools/samebits"
 same() { "$SAME" "$1" "$2" >/dev/null; }
 below() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 < b + 0) }'; }
-relmse() { # relmse A B
-    "$RB" compare "$1" "$2" --json | sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p' | head -n 1
-}
 # kept LOG KIND WHAT: how many objects whose node's name starts with KIND the log says are WHAT
 # (whole, coarser, left out) in the first BVH it lists
 kept() {
@@ -66,10 +63,8 @@ check "and by more than half ($rel < $area / 2)" below "$rel" "$(awk -v a="$area
 rb render "$T/crowd.yaml" --out "$T/area-bvh" -q --set integrator.hybrid.bvh_triangles=2800 \
     --set integrator.hybrid.bvh_select=area --set integrator.hybrid.screen_shadows=false
 expect_exit 0 "the crowd, bvh_select area, screen_shadows false"
-d_screen=$("$RB" compare "$T/area/frame.0015.exr" "$T/ref/frame.0015.exr" --layer direct --json |
-    sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p' | head -n 1)
-d_bvh=$("$RB" compare "$T/area-bvh/frame.0015.exr" "$T/ref/frame.0015.exr" --layer direct --json |
-    sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p' | head -n 1)
+d_screen=$(relmse "$T/area/frame.0015.exr" "$T/ref/frame.0015.exr" direct)
+d_bvh=$(relmse "$T/area-bvh/frame.0015.exr" "$T/ref/frame.0015.exr" direct)
 echo "# area score, direct layer against the reference: screen shadows $d_screen, BVH alone $d_bvh"
 check "screen shadows bring the direct layer nearer the reference ($d_screen < 0.8 x $d_bvh)" \
     below "$d_screen" "$(awk -v a="$d_bvh" 'BEGIN { print 0.8 * a }')"

@@ -18,9 +18,6 @@
 
 "$BUILD/tests/tools/blendscene" scene "$T" || fail_all "cannot write the blended scene"
 
-relmse() { # relmse A B LAYER
-    "$RB" compare "$1" "$2" --layer "$3" --json | sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p'
-}
 below() { # below VALUE LIMIT
     awk "BEGIN { exit !(\"$1\" != \"\" && $1 < $2) }"
 }
