@@ -127,6 +127,26 @@ vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, out vec3 l, out flo
     return from_vpl_spread(k, p, n, ng, clamp_g, 0.0, l, r2);
 }
 
+// The direction l from x toward punctual light L, its attenuation there (falloff and spot cone),
+// and the squared distance (1 for a directional light).
+void toward_light(rb_gpu_light L, vec3 x, out vec3 l, out float atten, out float dist2)
+{
+    uint kind = uint(L.position.w);
+    dist2 = 1.0;
+    if (kind == RB_KIND_DIRECTIONAL) {
+        l = -L.direction.xyz;
+        atten = 1.0;
+        return;
+    }
+    vec3 d = L.position.xyz - x;
+    dist2 = dot(d, d);
+    float dist = sqrt(dist2);
+    l = d / max(dist, 1e-8);
+    atten = rb_light_falloff(dist, L.direction.w);
+    if (kind == RB_KIND_SPOT)
+        atten *= rb_spot_factor(L.direction.xyz, -l, L.cone.xy);
+}
+
 // The light z1 reflects towards x1 (direction v) from the punctual lights, each weighted
 // against VPLs finding z1 (pdf_bundle: the bundle's area density of z1 seen from x1). The shadow
 // test is one texel, a hard shadow: the VPLs that make the same paths see z1 through the light's
@@ -139,19 +159,8 @@ vec3 from_lights(vec3 z1, vec3 n, vec3 v, rb_material m, float pdf_bundle)
         rb_gpu_light L = lights[j];
         uint kind = uint(L.position.w);
         vec3 l;
-        float atten, dist2 = 1.0;
-        if (kind == RB_KIND_DIRECTIONAL) {
-            l = -L.direction.xyz;
-            atten = 1.0;
-        } else {
-            vec3 d = L.position.xyz - z1;
-            dist2 = dot(d, d);
-            float dist = sqrt(dist2);
-            l = d / max(dist, 1e-8);
-            atten = rb_light_falloff(dist, L.direction.w);
-            if (kind == RB_KIND_SPOT)
-                atten *= rb_spot_factor(L.direction.xyz, -l, L.cone.xy);
-        }
+        float atten, dist2;
+        toward_light(L, z1, l, atten, dist2);
         float cos_z = dot(n, l);
         if (cos_z <= 0.0 || atten <= 0.0)
             continue;
@@ -254,18 +263,8 @@ float direct_guide(vec3 x1, vec3 n1)
         rb_gpu_light L = lights[j];
         uint kind = uint(L.position.w);
         vec3 l;
-        float atten;
-        if (kind == RB_KIND_DIRECTIONAL) {
-            l = -L.direction.xyz;
-            atten = 1.0;
-        } else {
-            vec3 d = L.position.xyz - x1;
-            float dist = length(d);
-            l = d / max(dist, 1e-8);
-            atten = rb_light_falloff(dist, L.direction.w);
-            if (kind == RB_KIND_SPOT)
-                atten *= rb_spot_factor(L.direction.xyz, -l, L.cone.xy);
-        }
+        float atten, dist2;
+        toward_light(L, x1, l, atten, dist2);
         float cos1 = dot(n1, l);
         if (cos1 <= 0.0 || atten <= 0.0)
             continue;
