@@ -233,33 +233,45 @@ void from_vpl_at_x1(uint j, vec3 x1, vec3 n1, vec3 ng1, vec3 v1, vec3 f0, float 
         add(id, is, n1, v1, l, f0, f90, rough, x * (w / n_a));
 }
 
-// (c) for VPL j: its light at the bundle's hit z1 (normal nz, reached along dir from x1, cos_in
-// there), reflected at z1 to x1, times scale (the bundle's 2 pi cos1 / n_c). With mis the path
-// is weighed (power heuristic) against VPL j's bounce finding z1 through (a), p(z1 | z) against
-// the bundle's density of z1 (its count n_c times count): where z1 is near z, the bounce's
-// density grows as the 1/r^2 of G does, and takes those paths over; nothing is clamped.
-void via_bundle(uint j, vec3 z1, vec3 nz, vec3 dir, rb_bundle_hit h, float cos_in, vec3 n1,
-                vec3 v1, vec3 f0, float f90, float rough, float scale, bool mis, float count,
-                inout vec3 id, inout vec3 is)
+// The light VPL j sends to the bundle's hit z1 (normal nz, reached along dir from x1, cos_in
+// there), reflected at z1 towards x1, and in w its weight: with mis, the power heuristic against
+// VPL j's bounce finding z1 through (a), p(z1 | z) against the bundle's density of z1 (its count
+// n_c times count): where z1 is near z, the bounce's density grows as the 1/r^2 of G does, and
+// takes those paths over; nothing is clamped.
+vec3 at_bundle_hit(uint j, vec3 z1, vec3 nz, vec3 dir, rb_bundle_hit h, float cos_in, bool mis,
+                   float count, out float w)
 {
     vec3 l;
     float r2;
+    w = 1.0;
     vec3 x = from_vpl(j, z1, nz, nz, false, l, r2);
     if (!any(greaterThan(x, vec3(0.0))))
-        return;
+        return vec3(0.0);
     x *= surface_brdf(nz, -dir, l, h.m);
-    float w = 1.0;
     if (mis) {
         float pdf_bounce = rb_bdpt_bounce_density(-dot(vpls[j].normal.xyz, l), dot(nz, l), r2);
         float pdf_bundle = rb_bdpt_bundle_density(cos_in, h.t * h.t);
         w = rb_bdpt_power(pc.counts.z * count, pdf_bundle, pc.counts.x, pdf_bounce);
     }
+    return x;
+}
+
+// (c) for VPL j: at_bundle_hit's light, times scale (the bundle's 2 pi cos1 / n_c), into x1's
+// indirect accumulators.
+void via_bundle(uint j, vec3 z1, vec3 nz, vec3 dir, rb_bundle_hit h, float cos_in, vec3 n1,
+                vec3 v1, vec3 f0, float f90, float rough, float scale, bool mis, float count,
+                inout vec3 id, inout vec3 is)
+{
+    float w;
+    vec3 x = at_bundle_hit(j, z1, nz, dir, h, cos_in, mis, count, w);
+    if (!any(greaterThan(x, vec3(0.0))))
+        return;
     add(id, is, n1, v1, dir, f0, f90, max(rough, RB_BDPT_LEAST_ROUGHNESS), // as (b) does
         x * (w * scale));
 }
 
 // (c) from every emitter point among the frame's K_v VPLs at once: the light they send to the
-// bundle's hit z1, reflected there towards x1, each weighed as via_bundle weighs it (against the
+// bundle's hit z1, reflected there towards x1, each weighed by at_bundle_hit (against the
 // point's bounce, the bundles counting emitter_bundle_count times n_c), summed and divided by
 // K_v as the emitters' dispatch divides its (a). With only VPL k's point, z1 saw one point's
 // hard shadows, and each of the few bundle directions carried them across the surfaces near it:
@@ -268,22 +280,11 @@ void via_bundle(uint j, vec3 z1, vec3 nz, vec3 dir, rb_bundle_hit h, float cos_i
 vec3 emitters_at(vec3 z1, vec3 nz, vec3 dir, rb_bundle_hit h, float cos_in, bool mis)
 {
     vec3 sum = vec3(0.0);
-    float pdf_bundle = rb_bdpt_bundle_density(cos_in, h.t * h.t);
     for (uint j = 0u; j < uint(pc.frame.y); j++) {
         if (!(vpls[j].position.w > 0.0) || uint(vpls[j].from.w) != RB_BDPT_VPL_EMITTER)
             continue;
-        vec3 l;
-        float r2;
-        vec3 x = from_vpl(j, z1, nz, nz, false, l, r2);
-        if (!any(greaterThan(x, vec3(0.0))))
-            continue;
-        x *= surface_brdf(nz, -dir, l, h.m);
-        float w = 1.0;
-        if (mis) {
-            float pdf_bounce = rb_bdpt_bounce_density(-dot(vpls[j].normal.xyz, l), dot(nz, l), r2);
-            w = rb_bdpt_power(pc.counts.z * emitter_bundle_count, pdf_bundle, pc.counts.x,
-                              pdf_bounce);
-        }
+        float w;
+        vec3 x = at_bundle_hit(j, z1, nz, dir, h, cos_in, mis, emitter_bundle_count, w);
         sum += x * w;
     }
     return sum / max(pc.frame.y, 1.0);
