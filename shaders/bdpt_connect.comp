@@ -110,24 +110,33 @@ vec3 environment(vec3 dir)
 // Radiance VPL k sends from its surface towards p (normal n at p, facing the VPL), times the
 // cosine at p: f_z power G V, G = cos_z cos_p / r^2, clamped at the clamp when one is set; an
 // emitter's point sends its emission: power G V.
-vec3 from_vpl_spread(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, float spread, out vec3 l,
-                     out float r2)
+// The same unshadowed, and whether the VPL sees p (vis, 0 or 1) apart.
+vec3 from_vpl_unshadowed(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, float spread, out vec3 l,
+                         out float r2, out float vis)
 {
     rb_gpu_vpl z = vpls[k];
     vec3 d = z.position.xyz - p;
     r2 = dot(d, d);
     l = d * inversesqrt(max(r2, 1e-20));
+    vis = 0.0;
     float cos_p = dot(n, l), cos_z = -dot(z.normal.xyz, l);
     if (cos_p <= 0.0 || cos_z <= 0.0 || dot(ng, l) <= 0.0)
         return vec3(0.0);
     float geo = cos_p * cos_z / max(r2 + spread, 1e-20);
     if (clamp_g && pc.counts.w > 0.0)
         geo = min(geo, pc.counts.w);
-    if (vpl_visibility(k, p, ng) <= 0.0)
-        return vec3(0.0);
+    vis = vpl_visibility(k, p, ng);
     if (uint(z.from.w) == RB_BDPT_VPL_EMITTER)
         return z.power.rgb * geo;
     return vpl_brdf(z, -l) * z.power.rgb * geo;
+}
+
+vec3 from_vpl_spread(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, float spread, out vec3 l,
+                     out float r2)
+{
+    float vis;
+    vec3 x = from_vpl_unshadowed(k, p, n, ng, clamp_g, spread, l, r2, vis);
+    return vis > 0.0 ? x : vec3(0.0);
 }
 
 vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, out vec3 l, out float r2)
@@ -323,9 +332,66 @@ float direct_guide(vec3 x1, vec3 n1)
     return sum;
 }
 
+// atan(y / x) for y >= 0, in [0, pi], from arithmetic alone: Abramowitz and Stegun 4.4.49 on
+// [0, 1] (error under 2e-8), folded. The drivers' own atan differs in its last bits from one Mesa
+// to the next, and the tarball must render another's bits exactly (check-dist).
+float angle_of(float y, float x)
+{
+    float ax = abs(x), hi = max(ax, y);
+    float t = hi > 0.0 ? min(ax, y) / hi : 0.0, s = t * t;
+    float r = t * (1.0 + s * (-0.3333314528 + s * (0.1999355085 + s * (-0.1420889944 +
+                   s * (0.1065626393 + s * (-0.0752896400 + s * (0.0429096138 +
+                   s * (-0.0161657367 + s * 0.0028662257))))))));
+    if (y > ax)
+        r = 0.5 * RB_PI - r;
+    return x < 0.0 ? RB_PI - r : r;
+}
+
+// The irradiance at x (normal n) from the frame's emissive triangles, unshadowed, in closed form
+// (emit_info.tris, both sides emitting): each triangle clipped to x's upper half-space, then
+// Lambert's sum over its edges, E = L / 2 |sum theta_k n . (v_k x v_k+1) / |v_k x v_k+1||.
+vec3 closed_form_irradiance(vec3 x, vec3 n)
+{
+    vec3 sum = vec3(0.0);
+    uint count = uint(emit_info.info.z);
+    for (uint e = 0u; e < count; e++) {
+        vec3 p[3] = vec3[3](emit_info.tris[4u * e].xyz, emit_info.tris[4u * e + 1u].xyz,
+                            emit_info.tris[4u * e + 2u].xyz);
+        // Sutherland-Hodgman against the plane n . (q - x) = 0: at most 4 corners.
+        vec3 c[4];
+        int m = 0;
+        for (int k = 0; k < 3; k++) {
+            vec3 a = p[k], b = p[(k + 1) % 3];
+            float da = dot(n, a - x), db = dot(n, b - x);
+            if (da > 0.0)
+                c[m++] = a;
+            if ((da > 0.0) != (db > 0.0))
+                c[m++] = a + (b - a) * (da / (da - db));
+        }
+        if (m < 3)
+            continue;
+        float s = 0.0;
+        for (int k = 0; k < m; k++) {
+            vec3 a = normalize(c[k] - x), b = normalize(c[(k + 1) % m] - x);
+            vec3 g = cross(a, b);
+            float len = length(g);
+            if (len > 1e-12)
+                s += angle_of(len, dot(a, b)) * dot(n, g) / len;
+        }
+        sum += emit_info.tris[4u * e + 3u].rgb * (0.5 * abs(s));
+    }
+    return sum;
+}
+
 // The emitters' dispatch for split texel sp: the direct light of each of the frame's K_v VPLs
 // that is a point on an emitter, at the pixel sp holds, weighed against the n_b bundles of the
-// pixel's sub-image that find the emitter (rb_bdpt_balance with counts K_v and n_b). A point
+// pixel's sub-image that find the emitter (rb_bdpt_balance with counts K_v and n_b). Where the
+// frame's emitters are few untextured triangles (emit_info.info.z), the diffuse part is their
+// closed-form irradiance times the points' shadowed share of theirs (the ratio estimator of
+// Heitz et al. 2018), all of it, the bundles' emission hits keeping their specular part: the
+// points' irradiance near an emitter is a spot per point (the Cornell box's ceiling beside the
+// light quad, lit by its back 0.9 units below), and the closed form draws the emitter's shape;
+// the points keep only the shadows' say. A point
 // stands for a = 1 / (K_v p) of the emitter's area (p its density) and lights as a disk of that
 // area would: cos cos / (r^2 + a / pi), which near the emitter stays below the emitter's own
 // radiance, as an area light's does, where a point's 1 / r^2 threw a bright dot on a surface
@@ -350,15 +416,18 @@ void emitters(ivec2 sp)
         uint k_v = uint(pc.frame.y), k_b = uint(pc.frame.z), count = uint(n * n);
         uint s = uint((sp.y / sub.y) * n + sp.x / sub.x);
         float n_b = float(rb_bdpt_share(k_b, s, count)), n_a = pc.frame.y;
+        bool closed = emit_info.info.z > 0.0 && pc.frame.y > 0.0;
+        vec3 shadowed = vec3(0.0), unshadowed = vec3(0.0);
         for (uint j = 0u; j < k_v; j++) {
             if (!(vpls[j].position.w > 0.0) || uint(vpls[j].from.w) != RB_BDPT_VPL_EMITTER)
                 continue;
             vec3 l;
-            float r2;
+            float r2, vis;
             float spread = pc.frame.y > 0.0 && vpls[j].normal.w > 0.0
                                ? 1.0 / (RB_PI * n_a * vpls[j].normal.w)
                                : 0.0;
-            vec3 x = from_vpl_spread(j, x1, n1, ng1, strategies == RB_BDPT_VPL, spread, l, r2);
+            vec3 x = from_vpl_unshadowed(j, x1, n1, ng1, strategies == RB_BDPT_VPL, spread, l, r2,
+                                         vis);
             if (!any(greaterThan(x, vec3(0.0))))
                 continue;
             float w = 1.0;
@@ -366,7 +435,21 @@ void emitters(ivec2 sp)
                 float pdf_bundle = rb_bdpt_bundle_density(-dot(vpls[j].normal.xyz, l), r2);
                 w = rb_bdpt_balance(n_a, vpls[j].normal.w, n_b, pdf_bundle);
             }
-            add(dd, ds, n1, v1, l, f0, f90, rough, x * (w / n_a));
+            if (closed)
+                unshadowed += x;
+            if (closed && vis > 0.0) {
+                vec3 kd, ks;
+                rb_brdf_parts(n1, v1, l, f0, f90, rough, kd, ks);
+                shadowed += kd * x;
+                ds += ks * x * (w / n_a);
+            } else if (!closed && vis > 0.0) {
+                add(dd, ds, n1, v1, l, f0, f90, rough, x * (w / n_a));
+            }
+        }
+        if (closed) {
+            vec3 e = closed_form_irradiance(x1, n1);
+            dd = mix(vec3(0.0), shadowed / max(unshadowed, vec3(1e-30)) * e,
+                     greaterThan(unshadowed, vec3(0.0)));
         }
     }
     // The filter's guide rides in the alpha.
@@ -448,7 +531,12 @@ void main()
                         float pdf_bundle = rb_bdpt_bundle_density(abs(cos_in), h.t * h.t);
                         w = rb_bdpt_balance(n_b, pdf_bundle, pc.frame.y, emit_info.info.y * lum);
                     }
-                    add(dd, ds, n1, v1, dir, f0, f90, rough, h.m.emission * (w * scale / n_b));
+                    // Its diffuse part is the emitters' dispatch's alone where the emitters are
+                    // in closed form there.
+                    vec3 diffuse = vec3(0.0);
+                    add(diffuse, ds, n1, v1, dir, f0, f90, rough, h.m.emission * (w * scale / n_b));
+                    if (!(emit_info.info.z > 0.0 && pc.frame.y > 0.0 && strategies == RB_BDPT_MIS))
+                        dd += diffuse;
                 }
                 if (strategies != RB_BDPT_VPL && cos_in > 0.0) {
                     float pdf_bundle = rb_bdpt_bundle_density(cos_in, h.t * h.t);

@@ -235,9 +235,21 @@ void vpl(uint i)
 void main()
 {
     uint i = gl_GlobalInvocationID.x;
+    uint count = uint(pc.sizes.w);
+    bool closed = count <= uint(RB_BDPT_ANALYTIC_MAX);
+    for (uint e = 0u; closed && e < count; e++)
+        closed = materials[emitters[e].tri.w].textures.w < 0;
     if (i == 0u) {
         float sum, p_e = emitter_chance(sum);
-        emit_info.info = vec4(p_e, sum > 0.0 ? p_e / (2.0 * sum) : 0.0, 0.0, 0.0);
+        emit_info.info = vec4(p_e, sum > 0.0 ? p_e / (2.0 * sum) : 0.0,
+                              closed ? float(count) : 0.0, 0.0);
+    }
+    if (closed && i < count) {
+        uvec4 t = emitters[i].tri;
+        emit_info.tris[4u * i + 0u] = vec4(geo.vertices.v[t.x].position.xyz, 0.0);
+        emit_info.tris[4u * i + 1u] = vec4(geo.vertices.v[t.y].position.xyz, 0.0);
+        emit_info.tris[4u * i + 2u] = vec4(geo.vertices.v[t.z].position.xyz, 0.0);
+        emit_info.tris[4u * i + 3u] = vec4(materials[t.w].emissive.rgb, 0.0);
     }
     if (i < pc.counts.x)
         vpl(i);

@@ -29,7 +29,8 @@ _Static_assert(sizeof(struct rb_gpu_vpl) == 80, "VPL layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_light) == 16, "bdpt light layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_sample) == 32, "bdpt sample layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_emitter) == 16, "bdpt emitter layout");
-_Static_assert(sizeof(struct rb_gpu_bdpt_emit_info) == 16, "bdpt emitter summary layout");
+_Static_assert(sizeof(struct rb_gpu_bdpt_emit_info) == 16 + 64 * RB_BDPT_ANALYTIC_MAX,
+               "bdpt emitter summary layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_generate_push) == 48, "generate push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_connect_push) == 96, "connect push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_bounce_push) == 48, "bounce push constants");

@@ -46,12 +46,21 @@ struct rb_gpu_bdpt_emitter {
     RB_UVEC4(tri); /* xyz: its corners' indices into the frame's world vertices; w: material */
 };
 
+/* At most this many emissive triangles are also integrated in closed form (bdpt_connect.comp's
+ * emitters' dispatch); a scene with more lights by its points alone. */
+#define RB_BDPT_ANALYTIC_MAX 16
+
 /* What the frame's emitters come to, written by bdpt_generate.comp for bdpt_connect.comp. */
 struct rb_gpu_bdpt_emit_info {
     RB_VEC4(info); /* x: P_e, the chance a VPL is a point on an emitter rather than a VPL of a
                     * punctual light; y: P_e / (2 S), S the sum of area x luminance of the
                     * emissive factor over the emitters: an emitter point's area density per
-                    * unit of that luminance (both sides); z, w: unused */
+                    * unit of that luminance (both sides); z: how many triangles tris holds, the
+                    * frame's emitters (0: none, more than RB_BDPT_ANALYTIC_MAX, or a textured
+                    * one); w: unused */
+    RB_VEC4(tris[4 * RB_BDPT_ANALYTIC_MAX]); /* per emissive triangle, 4 in a row: its corners
+                                              * in the frame's world space (xyz), then its
+                                              * emissive factor (rgb, both sides) */
 };
 
 /* Per light, what sampling it needs beyond struct rb_gpu_light (host-written each frame). */
