@@ -327,7 +327,7 @@ float direct_guide(vec3 x1, vec3 n1)
         if (first >= 0)
             vis = shadow_lookup(uint(first) + (kind == RB_KIND_POINT ? rb_cube_face(-l) : 0u),
                                 x1, n1, cos1, false);
-        sum += vis * dot(L.color.rgb, vec3(0.2126, 0.7152, 0.0722)) * atten * cos1 / RB_PI;
+        sum += vis * rb_luminance(L.color.rgb) * atten * cos1 / RB_PI;
     }
     return sum;
 }
@@ -527,7 +527,7 @@ void main()
                     // have no points (zero density).
                     float w = 1.0;
                     if (strategies == RB_BDPT_MIS) {
-                        float lum = dot(h.m.emission, vec3(0.2126, 0.7152, 0.0722));
+                        float lum = rb_luminance(h.m.emission);
                         float pdf_bundle = rb_bdpt_bundle_density(abs(cos_in), h.t * h.t);
                         w = rb_bdpt_balance(n_b, pdf_bundle, pc.frame.y, emit_info.info.y * lum);
                     }

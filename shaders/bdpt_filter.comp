@@ -68,14 +68,9 @@ vec2 inverse_depth_slope(ivec2 px, ivec2 size, float w)
     return slope;
 }
 
-float luminance(vec3 c)
-{
-    return dot(c, vec3(0.2126, 0.7152, 0.0722));
-}
-
 // The taps' moments for the slope at an edge: over the indirect taps (weights wi, which sum to
 // the class count), the sums of wi o, wi o o^T (xx, yy, xy) and wi^2 for offsets o, and per image
-// the sums of wi o v and wi luminance(v)^2.
+// the sums of wi o v and wi rb_luminance(v)^2.
 struct moments {
     vec2 o;
     vec3 oo;
@@ -104,7 +99,7 @@ vec3 at_pixel(vec3 m, moments t, int i, float inv)
     if (!(var_o > 1e-3))
         return m;
     vec3 b = ((u.x * t.ox[i] + u.y * t.oy[i]) * inv - len * m) / var_o;
-    float bl = luminance(b), ml = luminance(m);
+    float bl = rb_luminance(b), ml = rb_luminance(m);
     float residual = max(t.l2[i] * inv - ml * ml - bl * bl * var_o, 0.0);
     float var_b = residual * t.w2 * inv * inv / var_o; // residual / (effective count var_o)
     float shrink = bl * bl / max(bl * bl + 4.0 * var_b, 1e-30);
@@ -209,8 +204,8 @@ void main()
                 t.oy[0] += wi * o.y * v2;
                 t.ox[1] += wi * o.x * v3;
                 t.oy[1] += wi * o.y * v3;
-                t.l2[0] += wi * luminance(v2) * luminance(v2);
-                t.l2[1] += wi * luminance(v3) * luminance(v3);
+                t.l2[0] += wi * rb_luminance(v2) * rb_luminance(v2);
+                t.l2[1] += wi * rb_luminance(v3) * rb_luminance(v3);
             }
     }
     float inv = count > 0.0 ? 1.0 / count : 0.0, inv_d = count_d > 0.0 ? 1.0 / count_d : 0.0;

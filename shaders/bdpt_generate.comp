@@ -128,13 +128,13 @@ rb_gpu_vpl emitter_vpl(vec3 u, float p_e, float sum)
     vec3 n = normalize(cross(p1 - p0, p2 - p0)) * (rest < 0.5 ? 1.0 : -1.0);
     vec2 uv = b0 * geo.vertices.v[t.x].uv.xy + b1 * geo.vertices.v[t.y].uv.xy + b2 * geo.vertices.v[t.z].uv.xy;
     rb_surface m = rb_material_eval(materials[t.w], uv, srgb_textures, linear_textures);
-    float lum = luminance(materials[t.w].emissive.rgb);
+    float lum = rb_luminance(max(materials[t.w].emissive.rgb, vec3(0.0)));
     float pdf = p_e * lum / (2.0 * sum);
     if (!(pdf > 0.0))
         return o;
     rb_material q = rb_material_unpack(rb_material_pack(vec3(0.0), vec3(0.0), 1.0, m.emission));
     o.position = vec4(b0 * p0 + b1 * p1 + b2 * p2, 1.0);
-    o.normal = vec4(n, p_e * luminance(q.emission) / (2.0 * sum));
+    o.normal = vec4(n, p_e * rb_luminance(max(q.emission, vec3(0.0))) / (2.0 * sum));
     o.power = vec4(m.emission / pdf, 0.0);
     return o;
 }

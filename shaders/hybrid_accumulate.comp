@@ -31,7 +31,7 @@ void main()
             uint state = floatBitsToUint(s.a.w);
             if (state == RB_HYBRID_NONE || state == RB_HYBRID_DROPPED || state == RB_HYBRID_QUEUED)
                 continue;
-            float x = rb_lum(s.a.rgb + s.b.rgb);
+            float x = rb_luminance(s.a.rgb + s.b.rgb);
             direct[lobe] += vec4(s.a.rgb, 1.0);
             indirect[lobe] += vec4(s.b.rgb, x * x);
         }

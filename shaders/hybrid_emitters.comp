@@ -20,7 +20,7 @@ float emitter_power(uint e)
     rb_gpu_vertex v0 = vertex_at(index_at(3u * t));
     vec3 p1 = vertex_at(index_at(3u * t + 1u)).position.xyz, p2 = vertex_at(index_at(3u * t + 2u)).position.xyz;
     float area = 0.5 * length(cross(p1 - v0.position.xyz, p2 - v0.position.xyz));
-    return area * rb_hybrid_luminance(materials[floatBitsToUint(v0.uv.z)].emissive.rgb);
+    return area * rb_luminance(max(materials[floatBitsToUint(v0.uv.z)].emissive.rgb, vec3(0.0)));
 }
 
 void main()

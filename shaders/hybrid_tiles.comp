@@ -36,7 +36,7 @@ void main()
     vec4 mine = vec4(0.0); // variance of the mean, mean, pixels, pixels short of samples
     if (all(lessThan(uvec2(px), g.size.xy)) && imageLoad(gb_position, px).w > 0.0) {
         uint set = pc.history.w;
-        bool has_diffuse = rb_lum(imageLoad(gb_albedo, px).rgb) > 0.0;
+        bool has_diffuse = rb_luminance(imageLoad(gb_albedo, px).rgb) > 0.0;
         for (uint lobe = 0u; lobe < 2u; lobe++) {
             bool sampled = lobe == RB_HYBRID_SPECULAR || has_diffuse;
             vec4 d = imageLoad(acc, ivec3(px, 4u * set + 2u * lobe));
@@ -45,7 +45,7 @@ void main()
                 mine.w += sampled ? 1.0 : 0.0;
                 continue;
             }
-            float mean = rb_lum(d.rgb + ind.rgb) / d.w;
+            float mean = rb_luminance(d.rgb + ind.rgb) / d.w;
             // The variance of the pixel's mean, then of what the output shows: the filter
             // averages about pi radius^2 pixels' means (a Gaussian of sigma radius / 2, within
             // its window), with the radius hybrid_filter.comp gives the lobe's indirect light.

@@ -2,11 +2,6 @@
 // bdpt_generate.comp (the point on the one picked). Needs `geo` (the frame's slot's geometry
 // record, geometry_shared.h), and the buffers `emitters` and `materials` declared.
 
-float luminance(vec3 c)
-{
-    return dot(max(c, vec3(0.0)), vec3(0.2126, 0.7152, 0.0722));
-}
-
 // Emissive triangle e's area times the luminance of its emissive factor: its share of the
 // emitters' power (as the reference weighs them).
 float emitter_weight(uint e, out vec3 p0, out vec3 p1, out vec3 p2)
@@ -16,5 +11,5 @@ float emitter_weight(uint e, out vec3 p0, out vec3 p1, out vec3 p2)
     p1 = geo.vertices.v[t.y].position.xyz;
     p2 = geo.vertices.v[t.z].position.xyz;
     float area = 0.5 * length(cross(p1 - p0, p2 - p0));
-    return area * luminance(materials[t.w].emissive.rgb);
+    return area * rb_luminance(max(materials[t.w].emissive.rgb, vec3(0.0)));
 }

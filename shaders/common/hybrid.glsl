@@ -101,11 +101,6 @@ bool rb_hybrid_bvh_filter(uint t, vec2 bary)
 
 #include "bvh.glsl"
 
-float rb_lum(vec3 c)
-{
-    return dot(c, vec3(0.2126, 0.7152, 0.0722));
-}
-
 uint rb_hybrid_slot(uint lobe, uint ray, ivec2 px)
 {
     return ((lobe * pc.frame.y + ray) * g.size.y + uint(px.y)) * g.size.x + uint(px.x);
@@ -275,18 +270,13 @@ float rb_hybrid_emit_total()
     return pc.bake.w == 0u ? 0.0 : uintBitsToFloat(blocks[rb_hybrid_cdf_base() + pc.bake.w - 1u]);
 }
 
-float rb_hybrid_luminance(vec3 c)
-{
-    return dot(max(c, vec3(0.0)), vec3(0.2126, 0.7152, 0.0722));
-}
-
 // The light sample's pdf (solid angle, from the ray's origin) of a point of emissive material m
 // at distance dist whose face is at cosine cos_l to the ray: the emitter chosen by power, the
 // point uniformly on it, so per unit area the emissive factor's luminance over the total power.
 float rb_hybrid_light_pdf(rb_gpu_material m, float dist, float cos_l)
 {
     float total = rb_hybrid_emit_total();
-    float p_area = total > 0.0 ? rb_hybrid_luminance(m.emissive.rgb) / total : 0.0;
+    float p_area = total > 0.0 ? rb_luminance(max(m.emissive.rgb, vec3(0.0))) / total : 0.0;
     return cos_l > 0.0 ? p_area * dist * dist / cos_l : 1e30;
 }
 

@@ -27,7 +27,7 @@ uint desired(uint lobe, vec3 c_diff, vec3 f0, float roughness, float direct_lum,
     float spp = float(pc.sizes.x);
     float w;
     if (lobe == RB_HYBRID_DIFFUSE) {
-        float a = rb_lum(c_diff);
+        float a = rb_luminance(c_diff);
         if (a <= 0.0)
             return 0u;
         w = clamp(2.0 * a, 0.5, 1.0);
@@ -79,9 +79,9 @@ void main()
         uint direct_layer = 4u * younger + 2u * lobe;
         vec4 have = fresh || q.x < 0 ? vec4(0.0) : imageLoad(acc_prev, ivec3(q, direct_layer));
         vec4 have_ind = fresh || q.x < 0 ? vec4(0.0) : imageLoad(acc_prev, ivec3(q, direct_layer + 1u));
-        float texture_w = lobe == RB_HYBRID_DIFFUSE ? rb_lum(c_diff) : rb_spec_map(spec.rgb);
-        float est = have.w > 0.0 ? texture_w * rb_lum(have.rgb + have_ind.rgb) / have.w : 0.0;
-        uint want = desired(lobe, c_diff, spec.rgb, spec.a, rb_lum(imageLoad(direct_light, px).rgb), est);
+        float texture_w = lobe == RB_HYBRID_DIFFUSE ? rb_luminance(c_diff) : rb_spec_map(spec.rgb);
+        float est = have.w > 0.0 ? texture_w * rb_luminance(have.rgb + have_ind.rgb) / have.w : 0.0;
+        uint want = desired(lobe, c_diff, spec.rgb, spec.a, rb_luminance(imageLoad(direct_light, px).rgb), est);
         // A tile's mask counts only once its accumulator has started: the frame that starts
         // it asks for what every pixel wants, whatever came before.
         bool done = !fresh && pc.params.x > 0.0 && rb_hybrid_tile_done(px, lobe == RB_HYBRID_DIFFUSE) >= 0.5;

@@ -103,6 +103,12 @@ struct rb_gpu_shadow_view {
 #define RB_LAYER_SAMPLES 8u
 #define RB_LAYER_TILES 9u
 #define RB_LAYER_VARIANCE 10u
+
+/* Luminance with the Rec. 709 weights that lib/ and the reference use too. */
+float rb_luminance(vec3 c)
+{
+    return dot(c, vec3(0.2126, 0.7152, 0.0722));
+}
 #endif
 
 /* A frame's result with every layer: these floats per pixel, in this order (the reference's
