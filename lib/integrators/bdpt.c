@@ -1007,6 +1007,8 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
                                    .depth = &d->jittered_depth,
                                    .offset_px = {d->offset_px[slot][0], d->offset_px[slot][1]}});
     b->slot = slot;
+    b->offset_px[0] = d->offset_px[slot][0];
+    b->offset_px[1] = d->offset_px[slot][1];
     if (it->job->integrator.bdpt.samples == RB_BDPT_SAMPLES_FRESH)
         fill_samples(b, slot, (uint32_t)ctx->frame);
     record_cache(it, d, cmd, ctx);

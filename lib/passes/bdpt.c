@@ -486,6 +486,7 @@ void rb_pass_bdpt_emitters_direct_record(struct rb_pass_bdpt *p, VkCommandBuffer
         .params = {b->vpl_bias, (float)b->vpl_size_px, (float)b->bundle_size_px,
                    (float)b->bundle.capacity_nodes},
         .bounce = {RB_NONE, RB_NONE, b->bounce_vpl_size_px, 1},
+        .offset = {b->offset_px[0], b->offset_px[1], 0.0f, 0.0f},
     };
     frame_counts(b, pc.frame);
     push(cmd, &p->connect, &pc, sizeof(pc));

@@ -32,7 +32,7 @@ _Static_assert(sizeof(struct rb_gpu_bdpt_emitter) == 16, "bdpt emitter layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_emit_info) == 16 + 64 * RB_BDPT_ANALYTIC_MAX,
                "bdpt emitter summary layout");
 _Static_assert(sizeof(struct rb_gpu_bdpt_generate_push) == 48, "generate push constants");
-_Static_assert(sizeof(struct rb_gpu_bdpt_connect_push) == 96, "connect push constants");
+_Static_assert(sizeof(struct rb_gpu_bdpt_connect_push) == 112, "connect push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_bounce_push) == 48, "bounce push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_emitters_push) == 16, "emitters push constants");
 _Static_assert(sizeof(struct rb_gpu_bdpt_image_push) == 48, "split/gather/filter push constants");
@@ -378,6 +378,7 @@ struct rb_bdpt_frame {
     uint32_t sub_width_px, sub_height_px; /* a sub-image: the frame's size / n, rounded up */
     uint32_t vpl_size_px, bundle_size_px;
     uint32_t bounce_vpl_size_px; /* the bounce VPLs' maps: a corner of their vpl_maps layers */
+    float offset_px[2];          /* the cache's subpixel offset this frame (its G-buffer's) */
     uint32_t filter_radius_px;
     float filter_depth, filter_normal;
     float filter_light;  /* the least ratio of two pixels' direct light the filter joins; 0: any */
