@@ -108,9 +108,9 @@ vec3 environment(vec3 dir)
 }
 
 // Radiance VPL k sends from its surface towards p (normal n at p, facing the VPL), times the
-// cosine at p: f_z power G V, G = cos_z cos_p / r^2, clamped at the clamp when one is set; an
-// emitter's point sends its emission: power G V.
-// The same unshadowed, and whether the VPL sees p (vis, 0 or 1) apart.
+// cosine at p, unshadowed: f_z power G, G = cos_z cos_p / (r^2 + spread), clamped at the clamp
+// when one is set; an emitter's point sends its emission: power G. In vis, whether the VPL sees
+// p through its map (0 or 1).
 vec3 from_vpl_unshadowed(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, float spread, out vec3 l,
                          out float r2, out float vis)
 {
@@ -131,17 +131,12 @@ vec3 from_vpl_unshadowed(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, float sp
     return vpl_brdf(z, -l) * z.power.rgb * geo;
 }
 
-vec3 from_vpl_spread(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, float spread, out vec3 l,
-                     out float r2)
-{
-    float vis;
-    vec3 x = from_vpl_unshadowed(k, p, n, ng, clamp_g, spread, l, r2, vis);
-    return vis > 0.0 ? x : vec3(0.0);
-}
-
+// The same, shadowed (times V) and without spread.
 vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, out vec3 l, out float r2)
 {
-    return from_vpl_spread(k, p, n, ng, clamp_g, 0.0, l, r2);
+    float vis;
+    vec3 x = from_vpl_unshadowed(k, p, n, ng, clamp_g, 0.0, l, r2, vis);
+    return vis > 0.0 ? x : vec3(0.0);
 }
 
 // The direction l from x toward punctual light L, its attenuation there (falloff and spot cone),
@@ -411,6 +406,14 @@ vec3 at_pixel_centre(vec3 x, vec3 n, ivec2 px, ivec2 sub, int grid)
     return c;
 }
 
+// Whether the emitters' diffuse light is in closed form this frame (bdpt_generate.comp found few
+// untextured emissive triangles, and the frame has points to shadow it with): then the emitters'
+// dispatch makes all of it, and the bundles' emission hits keep their specular part.
+bool closed_form()
+{
+    return emit_info.info.z > 0.0 && pc.frame.y > 0.0;
+}
+
 // The emitters' dispatch for split texel sp: the direct light of each of the frame's K_v VPLs
 // that is a point on an emitter, at the pixel sp holds, weighed against the n_b bundles of the
 // pixel's sub-image that find the emitter (rb_bdpt_balance with counts K_v and n_b). Where the
@@ -448,7 +451,7 @@ void emitters(ivec2 sp)
         uint k_v = uint(pc.frame.y), k_b = uint(pc.frame.z), count = uint(n * n);
         uint s = uint((sp.y / sub.y) * n + sp.x / sub.x);
         float n_b = float(rb_bdpt_share(k_b, s, count)), n_a = pc.frame.y;
-        bool closed = emit_info.info.z > 0.0 && pc.frame.y > 0.0;
+        bool closed = closed_form();
         vec3 shadowed = vec3(0.0), unshadowed = vec3(0.0);
         for (uint j = 0u; j < k_v; j++) {
             if (!(vpls[j].position.w > 0.0) || uint(vpls[j].from.w) != RB_BDPT_VPL_EMITTER)
@@ -462,19 +465,21 @@ void emitters(ivec2 sp)
                                          vis);
             if (!any(greaterThan(x, vec3(0.0))))
                 continue;
+            if (closed)
+                unshadowed += x;
+            if (!(vis > 0.0))
+                continue;
             float w = 1.0;
             if (strategies == RB_BDPT_MIS) {
                 float pdf_bundle = rb_bdpt_bundle_density(-dot(vpls[j].normal.xyz, l), r2);
                 w = rb_bdpt_balance(n_a, vpls[j].normal.w, n_b, pdf_bundle);
             }
-            if (closed)
-                unshadowed += x;
-            if (closed && vis > 0.0) {
+            if (closed) {
                 vec3 kd, ks;
                 rb_brdf_parts(n1, v1, l, f0, f90, rough, kd, ks);
                 shadowed += kd * x;
                 ds += ks * x * (w / n_a);
-            } else if (!closed && vis > 0.0) {
+            } else {
                 add(dd, ds, n1, v1, l, f0, f90, rough, x * (w / n_a));
             }
         }
@@ -567,7 +572,7 @@ void main()
                     // in closed form there.
                     vec3 diffuse = vec3(0.0);
                     add(diffuse, ds, n1, v1, dir, f0, f90, rough, h.m.emission * (w * scale / n_b));
-                    if (!(emit_info.info.z > 0.0 && pc.frame.y > 0.0 && strategies == RB_BDPT_MIS))
+                    if (!(closed_form() && strategies == RB_BDPT_MIS))
                         dd += diffuse;
                 }
                 if (strategies != RB_BDPT_VPL && cos_in > 0.0) {
