@@ -56,12 +56,7 @@ cornell="$SCENES/cornell-box/CornellBox.glb"
 has_cornell=false
 if [ -f "$cornell" ]; then
     has_cornell=true
-    cat >"$out/cornell.yaml" <<EOT
-scene: $(cd "$(dirname "$cornell")" && pwd)/CornellBox.glb
-output: frame.####.exr
-resolution: [${curve_size%x*}, ${curve_size#*x}]
-frames: {start: 0, end: 9, rate: 24}
-camera: {fov_y_deg: 39.3, keys: [{t: 0, position: [-278, 273, 800], look_at: [-278, 273, 0]}]}
+    classic_cornell "$out/cornell.yaml" "$cornell" "$curve_size" 9 <<EOT
 default_light: off
 integrator: {name: bdpt}
 EOT

@@ -55,12 +55,7 @@ counts() {
 # tests/bench-bdpt.sh has it).
 cornell="$SCENES/cornell-box/CornellBox.glb"
 if [ -f "$cornell" ]; then
-    cat >"$out/cornell.yaml" <<EOT
-scene: $(cd "$(dirname "$cornell")" && pwd)/CornellBox.glb
-output: frame.####.exr
-resolution: [640, 360]
-frames: {start: 0, end: 9, rate: 24}
-camera: {fov_y_deg: 39.3, keys: [{t: 0, position: [-278, 273, 800], look_at: [-278, 273, 0]}]}
+    classic_cornell "$out/cornell.yaml" "$cornell" 640x360 9 <<EOT
 default_light: off
 integrator: {name: hybrid}
 EOT

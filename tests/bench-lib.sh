@@ -1,5 +1,6 @@
 # Helpers of tests/bench.sh and the scripts it runs (sourced; a measurement, never a test).
 . tests/still-demo.sh
+. tests/classic-cornell.sh
 
 # median: the median of the numbers on standard input, one a line.
 median() { sort -g | awk '{ v[++n] = $1 } END { print (n % 2) ? v[(n + 1) / 2] : (v[n / 2] + v[n / 2 + 1]) / 2 }'; }

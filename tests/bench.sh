@@ -75,12 +75,7 @@ done
 SCENES=${RB_SCENES:-../shared/scenes}
 cornell="$SCENES/cornell-box/CornellBox.glb"
 if [ -f "$cornell" ]; then
-    cat >"$out/cornell.yaml" <<EOT
-scene: $(cd "$(dirname "$cornell")" && pwd)/CornellBox.glb
-output: frame.####.exr
-resolution: [64, 64]
-frames: {start: 0, end: 4, rate: 24}
-camera: {fov_y_deg: 39.3, keys: [{t: 0, position: [-278, 273, 800], look_at: [-278, 273, 0]}]}
+    classic_cornell "$out/cornell.yaml" "$cornell" 64x64 4 <<EOT
 lights: [{type: point, position: [-278, 10000, 0], intensity: 0}]
 integrator: {name: reference, reference: {spp: 64, max_bounces: 8}}
 EOT

@@ -2,6 +2,7 @@
 # repository root with BUILD set. rb runs the renderer and keeps its status, stdout and stderr.
 set -u
 . tests/still-demo.sh
+. tests/classic-cornell.sh
 BUILD=${BUILD:-build}
 RB="$BUILD/raybundle"
 T=$(mktemp -d "${TMPDIR:-/tmp}/rbt.XXXXXX")

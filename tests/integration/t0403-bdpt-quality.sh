@@ -131,12 +131,7 @@ if have_scene cornell-box/CornellBox.glb; then
     # falls by two orders of magnitude within a pixel: the emitters' closed form taken at the
     # caches' subpixel samples read several times the reference's pixel centre there (direct
     # relMSE 0.051), and the points alone drew spots (0.0049); at the pixels' centres, 0.0043.
-    cat >"$T/classic.yaml" <<EOT
-scene: $(cd "$(dirname "$box")" && pwd)/CornellBox.glb
-output: frame.####.exr
-resolution: [128, 128]
-frames: {start: 0, end: 9, rate: 24}
-camera: {fov_y_deg: 39.3, keys: [{t: 0, position: [-278, 273, 800], look_at: [-278, 273, 0]}]}
+    classic_cornell "$T/classic.yaml" "$box" 128x128 9 <<EOT
 default_light: off
 integrator: {name: bdpt}
 EOT

@@ -15,12 +15,7 @@ if ! have_scene "$scene"; then
 fi
 below() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 <= b + 0) }'; }
 under() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a + 0 < b + 0) }'; }
-cat >"$T/box.yaml" <<EOT
-scene: $(cd "$SCENES/cornell-box" && pwd)/CornellBox.glb
-output: frame.####.exr
-resolution: [160, 90]
-frames: {start: 0, end: 127, rate: 24}
-camera: {fov_y_deg: 39.3, keys: [{t: 0, position: [-278, 273, 800], look_at: [-278, 273, 0]}]}
+classic_cornell "$T/box.yaml" "$SCENES/cornell-box/CornellBox.glb" 160x90 127 <<EOT
 default_light: off
 layers: [direct, indirect, samples, tiles]
 integrator: {name: hybrid}

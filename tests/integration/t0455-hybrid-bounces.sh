@@ -21,12 +21,7 @@ indirect_lum() { # the indirect layer's mean luminance
         sed -n 's/^ *Stats Avg: \([0-9.e+-]*\) \([0-9.e+-]*\) \([0-9.e+-]*\) .*/\1 \2 \3/p' |
         awk '{ printf "%.6g\n", 0.2126 * $1 + 0.7152 * $2 + 0.0722 * $3 }'
 }
-cat >"$T/box.yaml" <<EOT
-scene: $(cd "$SCENES/cornell-box" && pwd)/CornellBox.glb
-output: frame.####.exr
-resolution: [160, 90]
-frames: {start: 0, end: 127, rate: 24}
-camera: {fov_y_deg: 39.3, keys: [{t: 0, position: [-278, 273, 800], look_at: [-278, 273, 0]}]}
+classic_cornell "$T/box.yaml" "$SCENES/cornell-box/CornellBox.glb" 160x90 127 <<EOT
 default_light: off
 layers: [direct, indirect]
 integrator: {name: hybrid, reference: {paths: full}}
