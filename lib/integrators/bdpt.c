@@ -77,10 +77,20 @@ static uint32_t wrap(int64_t x, uint32_t n)
     return (uint32_t)((x % n + n) % n);
 }
 
-/* Slot i's subpixel offset: the Hammersley points, centred, ((i + 1/2) / l, phi2(i) + 1/(2l)) -
- * (1/2, 1/2), phi2 the base-2 radical inverse; the centre when l is 1. */
-static void cache_offset(uint32_t l, uint32_t i, float out[2])
+/* Slot i's subpixel offset: the pixel's centre (integrator.bdpt.subpixel center, the default),
+ * or the Hammersley points, centred, ((i + 1/2) / l, phi2(i) + 1/(2l)) - (1/2, 1/2), phi2 the
+ * base-2 radical inverse (spread: seed 000's temporal supersampling); the centre when l is 1.
+ * Spread makes a pixel's light the mean over four points of its area, while the direct light, the
+ * G-buffer and the reference take its centre: where indirect light changes fast within a pixel
+ * they differ. The Cornell box's ceiling, seen at a grazing angle, falls from 0.23 to 0.14 in its
+ * last pixel before the back wall (128x128); spread read 0.25 there, the centre 0.19 (beauty
+ * relMSE 0.0074 against 0.0068). */
+static void cache_offset(uint32_t l, uint32_t i, bool spread, float out[2])
 {
+    if (!spread) {
+        out[0] = out[1] = 0.0f;
+        return;
+    }
     double y = (double)rb_qmc_sobol(i, 0) / 4294967296.0 + 0.5 / l; /* phi2(i) + 1/(2l) */
     out[0] = (float)((i + 0.5) / l - 0.5);
     out[1] = (float)(y - floor(y) - 0.5);
@@ -465,7 +475,7 @@ static enum rb_status create(struct rb_integrator *it, void **state, struct rb_e
     };
     for (uint32_t i = 0; i < RB_BDPT_MAX_CACHES; i++) {
         d->written[i] = INT_MIN;
-        cache_offset(b->cache_count, i, d->offset_px[i]);
+        cache_offset(b->cache_count, i, job->subpixel == RB_BDPT_SUBPIXEL_SPREAD, d->offset_px[i]);
     }
     static const struct rb_view_variant variants[] = {
         {RB_VIEW_KIND_PERSPECTIVE, RB_VIEW_OUTPUT_RSM},
@@ -1000,7 +1010,12 @@ static void record(struct rb_integrator *it, void *state, VkCommandBuffer cmd,
     rb_base_record_shadow(it, &d->base, cmd, ctx);
     if (!ctx->is_warmup)
         rb_base_record_direct_light(it, &d->base, cmd);
-    if (l > 1)
+    /* A cache at the pixels' centres reads the frame's own G-buffer when there is one: the same
+     * bits as drawing it again at offset 0 (chunks equal whole runs); a warm-up frame draws no
+     * frame G-buffer, and draws the cache's. */
+    bool centred = d->offset_px[slot][0] == 0.0f && d->offset_px[slot][1] == 0.0f;
+    b->gbuffer = l > 1 && (ctx->is_warmup || !centred) ? d->jittered : it->frame.gbuffer;
+    if (b->gbuffer == d->jittered)
         rb_base_record_gbuffer(it, &d->base, cmd, ctx,
                                &(struct rb_gbuffer_target){
                                    .colors = d->jittered,

@@ -69,6 +69,7 @@ static const char *const pixel_filter_names[] = {NULL, "center", "box"};
 static const char *const strategy_names[] = {NULL, "mis", "vpl", "bundle"};
 static const char *const hit_test_names[] = {NULL, "gaussian", "binary"};
 static const char *const samples_names[] = {NULL, "periodic", "fresh"};
+static const char *const subpixel_names[] = {NULL, "center", "spread"};
 static const char *const light_names[] = {NULL, "point", "spot", "directional"};
 static const char *const default_light_names[] = {NULL, "auto", "on", "off"};
 static const char *const bvh_select_names[] = {NULL, "relevance", "area"};
@@ -251,6 +252,10 @@ static const struct key keys[] = {
     K("integrator.bdpt.samples", KT_ENUM, JOB(integrator.bdpt.samples), NOLO, NOHI, "periodic", 0,
       "bdpt: periodic (cache i always the same points) or fresh (new points every frame)",
       ENUM(samples_names)),
+    K("integrator.bdpt.subpixel", KT_ENUM, JOB(integrator.bdpt.subpixel), NOLO, NOHI, "center", 0,
+      "bdpt: where the caches sample a pixel: center (all at its centre) or spread (cache i at "
+      "subpixel offset i)",
+      ENUM(subpixel_names)),
     K("integrator.hybrid.rays", KT_UINT, JOB(integrator.hybrid.rays), 1, 16, "1", 0,
       "hybrid: rays each lobe (diffuse, specular) of a pixel may request a frame"),
     K("integrator.hybrid.spp", KT_UINT, JOB(integrator.hybrid.spp), 1, 65536, "64", 0,

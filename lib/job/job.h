@@ -56,6 +56,13 @@ enum rb_bdpt_samples {
     RB_BDPT_SAMPLES_FRESH,       /* frame f the f-th block: new points every frame */
 };
 
+/* Where bdpt's temporal caches sample a pixel. */
+enum rb_bdpt_subpixel {
+    RB_BDPT_SUBPIXEL_DEFAULT = 0, /* resolves to CENTER */
+    RB_BDPT_SUBPIXEL_CENTER,      /* every cache at the pixel's centre, as the direct light */
+    RB_BDPT_SUBPIXEL_SPREAD,      /* cache i at subpixel offset i: the seed's supersampling */
+};
+
 /* How the hybrid's BVH scores objects for its triangle budget. */
 enum rb_bvh_select {
     RB_BVH_SELECT_DEFAULT = 0, /* resolves to RELEVANCE */
@@ -184,6 +191,7 @@ struct rb_job {
             enum rb_bdpt_hit_test hit_test;
             float hit_epsilon; /* equation (2)'s bound on the depth difference, in metres */
             enum rb_bdpt_samples samples;
+            enum rb_bdpt_subpixel subpixel;
             uint32_t bounce_vpl_size_px; /* the bounce VPLs' maps, at most vpl_size_px; 0 (the
                                           * default): vpl_size_px */
         } bdpt;
