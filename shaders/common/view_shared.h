@@ -36,8 +36,8 @@
 
 /* Paraboloid views tessellate each triangle so that no projected sub-edge is longer than this
  * many texels (while the level stays under RB_VIEW_TESS_MAX_LEVEL); view.c derives the edge
- * error this leaves: C^2 / (2 size), half a texel of a 256^2 map. */
-#define RB_VIEW_TESS_CHORD_PX 16.0
+ * error this leaves: C^2 / (2 size), 2 texels of a 256^2 map (and why not less). */
+#define RB_VIEW_TESS_CHORD_PX 32.0
 #define RB_VIEW_TESS_MAX_LEVEL 64.0
 /* Paraboloid views draw nothing nearer than this fraction of their far distance. */
 #define RB_VIEW_PARABOLOID_NEAR 1e-4

@@ -795,7 +795,9 @@ static void test_paraboloid_depth(void **state)
                   "box, worst relative error %.3g\n",
                   checked, skipped, margin_px, box_pixels, worst);
     assert_int_equal(bad, 0);
-    assert_true(skipped < disk / 20);
+    /* Most of the disk is checked: the texels within the edge bound of an edge of the grids'
+     * cells are 5.6% of it at 2 texels (C = 32), 1.5% at half a texel. */
+    assert_true(skipped < disk / 10);
     assert_true(box_pixels > 500);
 
     rb_pass_view_destroy(p);
