@@ -77,14 +77,23 @@ layout(push_constant) uniform Push { rb_gpu_bdpt_connect_push pc; };
 #include "bundle_search.glsl"
 
 // Whether VPL k sees p (geometric normal ng) through its paraboloid map: p is lifted off its
-// surface by a texel's footprint along ng (at most 4 / size radians at the distance) and its
-// distance from the VPL's eye tested against the stored one with a bias of vpl_bias of it. Each
-// of the K_v VPLs has a whole layer; their bounces (k >= K_v) a corner.
+// surface by a texel's footprint along ng (at most 4 / size radians at the distance), but never
+// more than halfway to the VPL's plane, and its distance from the VPL's eye tested against the
+// stored one with a bias of vpl_bias of it. Each of the K_v VPLs has a whole layer; their
+// bounces (k >= K_v) a corner. Without the bound, a surface just above the VPL's plane, facing
+// it, was lifted behind its hemisphere: the Cornell box's light quad hangs 0.9 units below the
+// ceiling, and its points on the quad's back saw none of the ceiling farther than 58 units away
+// (0.9 size / 4), which their light reaches beyond the quad's edges (the direct layer 0.0024,
+// 0.0021 with the bound; the classic view's 0.0030, 0.0024).
 float vpl_visibility(uint k, vec3 p, vec3 ng)
 {
     rb_gpu_view v = vpl_views[k];
     float far = v.origin.w, size = k < uint(pc.frame.y) ? pc.params.y : float(pc.bounce.z);
-    p += ng * (length(p - v.origin.xyz) * 4.0 / size);
+    float lift = length(p - v.origin.xyz) * 4.0 / size;
+    float height = dot(p - v.origin.xyz, v.axis.xyz), toward = -dot(ng, v.axis.xyz);
+    if (toward > 0.0 && height > 0.0)
+        lift = min(lift, 0.5 * height / toward);
+    p += ng * lift;
     vec3 q = (v.transform * vec4(p, 1.0)).xyz;
     float len = length(q);
     if (!(len > 0.0))

@@ -21,9 +21,10 @@
 #   state the same bits from frame to frame, within relMSE 0.0074 of a converged reference (0.0071;
 #   0.0077 with the caches at subpixel offsets, whose mean lit the ceiling's last row before the
 #   back wall at 1.8 times the reference, 1.3 at the centre; 0.0107 before every bundle's hit took
-#   all the emitter points and the filter's edges followed the slope) and its direct light within 0.003 (0.0032 before the emitters' closed form; the room's
-#   concave edges once took their neighbour's light, and the direct light's box once blurred
-#   every contact shadow); the short
+#   all the emitter points and the filter's edges followed the slope) and its direct light
+#   within 0.0023 (0.0025 before the VPL maps' lift was bounded by the light quad's gap, 0.0032
+#   before the emitters' closed form; the room's concave edges once took their neighbour's light,
+#   and the direct light's box once blurred every contact shadow); the short
 #   box's front face within 0.0025 (0.0048 while each bundle's hit saw one emitter point's hard
 #   shadow and carried it across the face as bands);
 #   a one-frame quick look shows that steady state; with fresh samples, frames 4-7 are within
@@ -114,8 +115,11 @@ if have_scene cornell-box/CornellBox.glb; then
     # A sub-image's one or two emitter points, spread over the interleave block by the direct
     # light's box, then blurred the boxes' contact shadows 2 pixels each way (0.011); each
     # pixel now takes every emitter point of the frame (0.003-0.004).
-    check "the Cornell box's direct light is within relMSE 0.003 of the reference ($ed)" \
-        awk "BEGIN { exit !($ed != \"\" && $ed < 0.003) }"
+    # The light quad's points on its back light the ceiling beyond its edges through the 0.9-unit
+    # gap; lifted off the ceiling by 4 texels' footprint, the ceiling farther than 58 units fell
+    # behind their maps' hemispheres (0.0025; 0.0021 with the lift bounded by the gap).
+    check "the Cornell box's direct light is within relMSE 0.0023 of the reference ($ed)" \
+        awk "BEGIN { exit !($ed != \"\" && $ed < 0.0023) }"
     # The ceiling's last row of pixels before the back wall (row 28, seen at a grazing angle):
     # its indirect light falls from 0.23 to 0.14 within that pixel. With the caches at subpixel
     # offsets (integrator.bdpt.subpixel spread) each read a point of the pixel's area, and their
@@ -152,7 +156,8 @@ if have_scene cornell-box/CornellBox.glb; then
     # edge is seen at a grazing angle and its irradiance from the quad's back, 0.9 units below,
     # falls by two orders of magnitude within a pixel: the emitters' closed form taken at the
     # caches' subpixel samples read several times the reference's pixel centre there (direct
-    # relMSE 0.051), and the points alone drew spots (0.0049); at the pixels' centres, 0.0043.
+    # relMSE 0.051), and the points alone drew spots (0.0049); at the pixels' centres, 0.0043;
+    # with every cache there, 0.0030; with the quad's back points seeing the ceiling, 0.0024.
     classic_cornell "$T/classic.yaml" "$box" 128x128 9 <<EOT
 default_light: off
 integrator: {name: bdpt}
@@ -165,8 +170,8 @@ EOT
     ec=$("$RB" compare "$T/cv/frame.0009.exr" "$T/cvr/frame.0009.exr" --layer direct --json |
         sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p')
     echo "# Cornell box, classic view: direct relMSE $ec"
-    check "the classic view's direct light is within relMSE 0.0046 of the reference ($ec)" \
-        awk "BEGIN { exit !(\"$ec\" != \"\" && $ec < 0.0046) }"
+    check "the classic view's direct light is within relMSE 0.0027 of the reference ($ec)" \
+        awk "BEGIN { exit !(\"$ec\" != \"\" && $ec < 0.0027) }"
 else
     skip "the Cornell box's quality" "$SCENES/cornell-box/CornellBox.glb is not there"
 fi
