@@ -89,8 +89,9 @@ float vpl_visibility(uint k, vec3 p, vec3 ng)
 {
     rb_gpu_view v = vpl_views[k];
     float far = v.origin.w, size = k < uint(pc.frame.y) ? pc.params.y : float(pc.bounce.z);
-    float lift = length(p - v.origin.xyz) * 4.0 / size;
-    float height = dot(p - v.origin.xyz, v.axis.xyz), toward = -dot(ng, v.axis.xyz);
+    vec3 from_eye = p - v.origin.xyz;
+    float lift = length(from_eye) * 4.0 / size;
+    float height = dot(from_eye, v.axis.xyz), toward = -dot(ng, v.axis.xyz);
     if (toward > 0.0 && height > 0.0)
         lift = min(lift, 0.5 * height / toward);
     p += ng * lift;

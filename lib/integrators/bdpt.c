@@ -12,9 +12,10 @@
  * VPL gets a paraboloid shadow map; each global ray-bundle is an orthographic view into per-pixel
  * linked lists, kept only at the texels where the points of the sub-image of the interleaved
  * G-buffer it lights land, connected to that sub-image before the next one reuses the list.
- * Temporal interleaved sampling (seed 000, section A): l caches, one per subpixel offset; frame f
- * computes cache f mod l alone, with that slot's own block of the sampling table on a G-buffer
- * jittered by the slot's offset, overwriting it whole (light and depth); the reproject pass finds
+ * Temporal interleaved sampling (seed 000, section A): l caches, each at the pixels' centre or
+ * at a subpixel offset of its own (integrator.bdpt.subpixel); frame f computes cache f mod l
+ * alone, with that slot's own block of the sampling table on a G-buffer at the slot's offset,
+ * overwriting it whole (light and depth); the reproject pass finds
  * where each pixel's surface was in the frames of the other caches, and reconstruct takes the
  * hit-weighted mean of the caches (equations 1 to 3) for output, which adds the direct light of the
  * frame's own, centred G-buffer. Its history is the l - 1 frames before (at least one, for motion
@@ -39,7 +40,8 @@ struct bdpt {
     struct rb_pass_reproject *reproject;
     struct rb_bdpt_frame b;
     struct rb_gpu_buffer usage; /* struct rb_gpu_list_counter per bundle, host-visible */
-    /* The caches' G-buffer, drawn at the slot's subpixel offset (l > 1) */
+    /* The caches' G-buffer, drawn at the slot's subpixel offset (l > 1; at the centre, in
+     * warm-up frames alone) */
     struct rb_gpu_image jittered[RB_GBUFFER_COLOR_COUNT], jittered_depth;
     float offset_px[RB_BDPT_MAX_CACHES][2];      /* slot i's subpixel offset */
     int written[RB_BDPT_MAX_CACHES];             /* the frame each slot holds; INT_MIN: none */
@@ -400,7 +402,6 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
                             "bdpt.gbuffer.depth", &d->jittered_depth, err);
     if (st)
         return st;
-    b->gbuffer = l > 1 ? d->jittered : frame->gbuffer;
 
     VkCommandBuffer cmd;
     if ((st = rb_gpu_oneshot_begin(gpu, &cmd, err)))

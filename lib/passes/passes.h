@@ -418,8 +418,9 @@ struct rb_bdpt_frame {
 
     /* The temporal caches (seed 000, section A): the filter writes the light of cache `slot`
      * (a layer of each array; the first one's alpha holds the depth), computed from `gbuffer`,
-     * the G-buffer at that cache's subpixel offset (the frame's own when l is 1); generate and
-     * bounce read that slot's block of the sampling table. */
+     * the G-buffer at that cache's subpixel offset, which each frame's record picks (the
+     * frame's own when l is 1, or when the cache is at the pixels' centre and the frame draws
+     * one); generate and bounce read that slot's block of the sampling table. */
     uint32_t cache_count, slot;
     VkDeviceSize sample_block_bytes;    /* a slot's rows, aligned for a storage offset */
     const struct rb_gpu_image *gbuffer; /* RB_GBUFFER_COLOR_COUNT images */
