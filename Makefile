@@ -79,7 +79,7 @@ DEPS := $(LIB_OBJ:.o=.d) $(CMD_OBJ:.o=.d) $(UNIT_BIN:=.d) $(TOOL_BIN:=.d) \
 DEPS_STAMP := $(BUILD)/.deps-ok
 
 .PHONY: all test check check-farm check-dist dist bench demo install uninstall clean lint format deps \
-	fuzz update-golden
+	fuzz update-golden ltc-table
 .SECONDARY: $(SPV_H)
 all: $(BUILD)/raybundle
 
@@ -131,6 +131,17 @@ $(BUILD)/tests/tools/%: tests/tools/%.c $(BUILD)/libraybundle.a $(BUILD)/.flags
 	@echo "  TOOL    $@"
 	$(Q)$(CC) $(ALL_CPPFLAGS) $(ALL_CFLAGS) $(ALL_LDFLAGS) -o $@ $< $(BUILD)/libraybundle.a \
 		$(PKG_LIBS) -lstdc++
+
+# The specular lobe's fitted cosines (tools/ltcfit.c): lib/passes/ltc_ggx.inc is its output,
+# kept in the tree (the fit takes a minute); `make ltc-table` writes it again, and t0101 refits
+# some of its columns.
+$(BUILD)/ltcfit: tools/ltcfit.c $(BUILD)/.flags
+	@mkdir -p $(dir $@)
+	@echo "  CC      $@"
+	$(Q)$(CC) -std=c11 $(WARN) $(FPFLAGS) $(CFLAGS) -o $@ $< -lpthread -lm
+
+ltc-table: $(BUILD)/ltcfit
+	$(Q)$(BUILD)/ltcfit lib/passes/ltc_ggx.inc
 
 # The demo scene's generator (tools/mkdemo.c): plain C, no library.
 $(BUILD)/mkdemo: tools/mkdemo.c $(BUILD)/.flags
@@ -200,7 +211,7 @@ fuzz:
 			$$corpus || exit 1; \
 	done
 
-test check: $(BUILD)/raybundle $(BUILD)/mkdemo $(UNIT_BIN) $(TOOL_BIN) $(FUZZ_REPLAY) \
+test check: $(BUILD)/raybundle $(BUILD)/mkdemo $(BUILD)/ltcfit $(UNIT_BIN) $(TOOL_BIN) $(FUZZ_REPLAY) \
 		$(FUZZ_SAN_BIN)
 	$(Q)BUILD=$(BUILD) tests/run.sh
 
@@ -258,7 +269,7 @@ lint:
 	$(Q)FORMAT_SRC="$(FORMAT_SRC)" tests/lint.sh
 
 FORMAT_SRC = $(LIB_C) $(LIB_CXX) $(CMD_C) $(wildcard lib/*/*.h cmd/*.h) $(UNIT_SRC) $(TOOL_SRC) \
-	$(wildcard tests/fuzz/*.c) tools/mkdemo.c
+	$(wildcard tests/fuzz/*.c) tools/mkdemo.c tools/ltcfit.c
 
 format:
 	$(Q)clang-format -i $(FORMAT_SRC)

@@ -49,7 +49,7 @@ done
 # Formatting: .clang-format, as `make format` applies it.
 if [ -z "${FORMAT_SRC:-}" ]; then
     FORMAT_SRC=$(ls lib/*/*.c lib/*/*.cpp lib/*/*.h cmd/*.c cmd/*.h tests/unit/*.c tests/tools/*.c tests/fuzz/*.c \
-        tools/mkdemo.c 2>/dev/null)
+        tools/mkdemo.c tools/ltcfit.c 2>/dev/null)
 fi
 # shellcheck disable=SC2086
 if ! out=$(clang-format --dry-run --Werror $FORMAT_SRC 2>&1); then

@@ -102,9 +102,10 @@ static void release(struct rb_gpu *gpu, struct bdpt *d)
 {
     struct rb_bdpt_frame *b = &d->b;
     struct rb_gpu_buffer *buffers[] = {
-        &b->bounds,      &b->samples,     &b->lights,      &b->vpls,         &b->vpl_views,
-        &b->probe_views, &b->vpl_draws,   &b->probe_draws, &b->bundle_views, &b->emitters,
-        &b->emit_info,   &b->emitter_cdf, &d->usage,       &b->history,      &b->hits};
+        &b->bounds,       &b->samples,     &b->lights,    &b->vpls,
+        &b->vpl_views,    &b->probe_views, &b->vpl_draws, &b->probe_draws,
+        &b->bundle_views, &b->emitters,    &b->emit_info, &b->emitter_cdf,
+        &b->ltc,          &d->usage,       &b->history,   &b->hits};
     for (size_t i = 0; i < COUNT(buffers); i++)
         rb_gpu_buffer_release(gpu, buffers[i]);
     for (int i = 0; i < RB_VIEW_RSM_TARGETS; i++) {
@@ -306,7 +307,10 @@ static enum rb_status make_resources(struct rb_integrator *it, struct bdpt *d, s
         (st = rb_frame_buffer(gpu, kb * sizeof(struct rb_gpu_list_counter), STORAGE, true,
                               "bdpt.usage", &d->usage, err)) ||
         (st = rb_frame_buffer(gpu, sizeof(struct rb_gpu_bdpt_emit_info), STORAGE, false,
-                              "bdpt.emit_info", &b->emit_info, err)))
+                              "bdpt.emit_info", &b->emit_info, err)) ||
+        (st = rb_frame_buffer(gpu, sizeof(rb_pass_ltc_ggx), STORAGE, false, "bdpt.ltc", &b->ltc,
+                              err)) ||
+        (st = rb_gpu_buffer_upload(gpu, &b->ltc, rb_pass_ltc_ggx, sizeof(rb_pass_ltc_ggx), err)))
         return st;
     for (uint32_t c = 0; c < b->cache_count; c++)
         fill_samples(b, c, c);
@@ -705,7 +709,7 @@ static void record_connect(struct rb_integrator *it, struct bdpt *d, VkCommandBu
 {
     struct rb_frame *frame = &it->frame;
     struct rb_bdpt_frame *b = &d->b;
-    struct rb_gpu_access uses[13 + RB_BDPT_SPLIT_COUNT + RB_BDPT_LIGHT_COUNT] = {
+    struct rb_gpu_access uses[14 + RB_BDPT_SPLIT_COUNT + RB_BDPT_LIGHT_COUNT] = {
         {.buffer = &frame->globals, .use = RB_GPU_COMPUTE_UNIFORM},
         {.buffer = &b->vpls, .use = RB_GPU_COMPUTE_READ},
         {.buffer = &b->vpl_views, .use = RB_GPU_COMPUTE_READ},
@@ -719,8 +723,9 @@ static void record_connect(struct rb_integrator *it, struct bdpt *d, VkCommandBu
         {.image = &frame->shadow_maps, .use = RB_GPU_COMPUTE_SAMPLED},
         {.image = &frame->env_map, .use = RB_GPU_COMPUTE_SAMPLED},
         {.buffer = &b->emit_info, .use = RB_GPU_COMPUTE_READ},
+        {.buffer = &b->ltc, .use = RB_GPU_COMPUTE_READ},
     };
-    uint32_t count = 13;
+    uint32_t count = 14;
     for (int i = 0; i < RB_BDPT_SPLIT_COUNT; i++)
         uses[count++] = (struct rb_gpu_access){.image = &b->split[i], .use = RB_GPU_COMPUTE_READ};
     if (k == RB_NONE) {

@@ -9,6 +9,7 @@
 #include "bdpt_bounce.comp.h"
 #include "bdpt_bounds.comp.h"
 #include "bdpt_connect.comp.h"
+#include "bdpt_emitter_direct.comp.h"
 #include "bdpt_emitters.comp.h"
 #include "bdpt_filter.comp.h"
 #include "bdpt_gather.comp.h"
@@ -18,8 +19,8 @@
 #include "bdpt_split.comp.h"
 
 struct rb_pass_bdpt {
-    struct rb_pass bounds, emitters, generate, bounce, split, mark, connect, gather, filter,
-        reconstruct;
+    struct rb_pass bounds, emitters, generate, bounce, split, mark, connect, emitter_direct, gather,
+        filter, reconstruct;
 };
 
 static const struct rb_pass_binding bounds_bindings[] = {
@@ -118,6 +119,7 @@ static const struct rb_pass_binding connect_bindings[] = {
     RB_PASS_BIND(RB_BIND_BDPT_CONNECT_EMIT_INFO, STORAGE_BUFFER),
     RB_PASS_BIND(RB_BIND_BDPT_CONNECT_EMITTED + 0, STORAGE_IMAGE),
     RB_PASS_BIND(RB_BIND_BDPT_CONNECT_EMITTED + 1, STORAGE_IMAGE),
+    RB_PASS_BIND(RB_BIND_BDPT_CONNECT_LTC, STORAGE_BUFFER),
 };
 _Static_assert(COUNT(connect_bindings) == RB_BIND_BDPT_CONNECT_COUNT, "connect bindings");
 
@@ -196,6 +198,8 @@ enum rb_status rb_pass_bdpt_create(struct rb_gpu *gpu, struct rb_pass_bdpt **out
                       rb_spv_bdpt_mark_comp)) ||
         (st = COMPUTE(connect, "connect", connect_bindings, sizeof(struct rb_gpu_bdpt_connect_push),
                       rb_spv_bdpt_connect_comp)) ||
+        (st = COMPUTE(emitter_direct, "emitter_direct", connect_bindings,
+                      sizeof(struct rb_gpu_bdpt_connect_push), rb_spv_bdpt_emitter_direct_comp)) ||
         (st = COMPUTE(gather, "gather", gather_bindings, image_push, rb_spv_bdpt_gather_comp)) ||
         (st = COMPUTE(filter, "filter", filter_bindings, image_push, rb_spv_bdpt_filter_comp)) ||
         (st = COMPUTE(reconstruct, "reconstruct", reconstruct_bindings, 0,
@@ -214,6 +218,7 @@ void rb_pass_bdpt_destroy(struct rb_pass_bdpt *p)
     rb_pass_release(&p->reconstruct);
     rb_pass_release(&p->filter);
     rb_pass_release(&p->gather);
+    rb_pass_release(&p->emitter_direct);
     rb_pass_release(&p->connect);
     rb_pass_release(&p->mark);
     rb_pass_release(&p->split);
@@ -409,11 +414,12 @@ void rb_pass_bdpt_mark_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
     vkCmdDispatch(cmd, groups(b->sub_width_px, 8), groups(b->sub_height_px, 8), 1);
 }
 
-static void bind_connect(struct rb_pass_bdpt *p, VkCommandBuffer cmd, const struct rb_frame *frame,
+/* Connect's bindings, which the emitters' dispatch shares (common/bdpt_connect.glsl). */
+static void bind_connect(struct rb_pass *pass, VkCommandBuffer cmd, const struct rb_frame *frame,
                          const struct rb_bdpt_frame *b)
 {
-    struct rb_pass_bindings bind = {.pass = &p->connect};
-    struct rb_gpu *gpu = p->connect.gpu;
+    struct rb_pass_bindings bind = {.pass = pass};
+    struct rb_gpu *gpu = pass->gpu;
     rb_pass_bind_buffer(&bind, RB_BIND_BDPT_CONNECT_GLOBALS, &frame->globals);
     for (uint32_t i = 0; i < RB_BDPT_SPLIT_COUNT; i++)
         rb_pass_bind_image(&bind, RB_BIND_BDPT_CONNECT_SPLIT + i, b->split[i].view, VK_NULL_HANDLE);
@@ -436,6 +442,7 @@ static void bind_connect(struct rb_pass_bdpt *p, VkCommandBuffer cmd, const stru
     for (uint32_t i = 0; i < RB_BDPT_EMITTED_COUNT; i++)
         rb_pass_bind_image(&bind, RB_BIND_BDPT_CONNECT_EMITTED + i, b->emitted[i].view,
                            VK_NULL_HANDLE);
+    rb_pass_bind_buffer(&bind, RB_BIND_BDPT_CONNECT_LTC, &b->ltc);
     rb_pass_record_bindings(cmd, &bind);
 }
 
@@ -452,7 +459,7 @@ void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
                                  const struct rb_frame *frame, const struct rb_bdpt_frame *b,
                                  uint32_t k)
 {
-    bind_connect(p, cmd, frame, b);
+    bind_connect(&p->connect, cmd, frame, b);
     uint32_t n = b->interleave, count = n * n, s = k % count;
     uint32_t pairs = b->vpl_count < b->bundle_count ? b->vpl_count : b->bundle_count;
     struct rb_gpu_bdpt_connect_push pc = {
@@ -477,7 +484,7 @@ void rb_pass_bdpt_emitters_direct_record(struct rb_pass_bdpt *p, VkCommandBuffer
                                          const struct rb_frame *frame,
                                          const struct rb_bdpt_frame *b)
 {
-    bind_connect(p, cmd, frame, b);
+    bind_connect(&p->emitter_direct, cmd, frame, b);
     uint32_t n = b->interleave;
     struct rb_gpu_bdpt_connect_push pc = {
         .index = {0, 0, 0, (uint32_t)b->strategies},
@@ -485,11 +492,11 @@ void rb_pass_bdpt_emitters_direct_record(struct rb_pass_bdpt *p, VkCommandBuffer
         .counts = {0.0f, 0.0f, 0.0f, b->clamp_g},
         .params = {b->vpl_bias, (float)b->vpl_size_px, (float)b->bundle_size_px,
                    (float)b->bundle.capacity_nodes},
-        .bounce = {RB_NONE, RB_NONE, b->bounce_vpl_size_px, 1},
+        .bounce = {RB_NONE, RB_NONE, b->bounce_vpl_size_px, 0},
         .offset = {b->offset_px[0], b->offset_px[1], 0.0f, 0.0f},
     };
     frame_counts(b, pc.frame);
-    push(cmd, &p->connect, &pc, sizeof(pc));
+    push(cmd, &p->emitter_direct, &pc, sizeof(pc));
     vkCmdDispatch(cmd, groups(b->sub_width_px * n, 8), groups(b->sub_height_px * n, 8), 1);
 }
 

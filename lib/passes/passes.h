@@ -370,6 +370,10 @@ void rb_pass_output_destroy(struct rb_pass_output *p);
  * octahedral geometric normal. */
 #define RB_BDPT_SPLIT_COUNT 4
 
+/* The fits of the specular lobe that the emitters' closed form reads (bdpt_shared.h's
+ * RB_LTC_SIZE): 4 floats an entry, as tools/ltcfit.c writes them. */
+extern const float rb_pass_ltc_ggx[RB_LTC_SIZE * RB_LTC_SIZE * 4];
+
 /* What the bdpt passes read and write besides the frame: the integrator's own resources and
  * settings (lib/integrators/bdpt.c fills it). All images RGBA32F unless said. */
 struct rb_bdpt_frame {
@@ -404,6 +408,7 @@ struct rb_bdpt_frame {
     struct rb_gpu_buffer emitters;     /* struct rb_gpu_bdpt_emitter [emitter_count] */
     struct rb_gpu_buffer emit_info;    /* struct rb_gpu_bdpt_emit_info */
     struct rb_gpu_buffer emitter_cdf;  /* float [emitter_count]: running sums of their weights */
+    struct rb_gpu_buffer ltc;          /* rb_pass_ltc_ggx, uploaded once */
     struct rb_gpu_image rsm[RB_VIEW_RSM_TARGETS];   /* a layer per shadow layer of the frame */
     struct rb_gpu_image rsm_depth;                  /* D32 scratch */
     struct rb_gpu_image probe[RB_VIEW_RSM_TARGETS]; /* 1x1, a layer per VPL (with bounces) */

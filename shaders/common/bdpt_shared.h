@@ -50,6 +50,11 @@ struct rb_gpu_bdpt_emitter {
  * emitters' dispatch); a scene with more lights by its points alone. */
 #define RB_BDPT_ANALYTIC_MAX 16
 
+/* The specular lobe's linearly transformed cosines (tools/ltcfit.c, lib/passes/ltc_ggx.inc): a
+ * table of RB_LTC_SIZE rows (sqrt(1 - n.v)) by RB_LTC_SIZE columns (roughness), a vec4 an entry:
+ * the inverse transform's m00 m02 m20 m22 (m11 = 1). */
+#define RB_LTC_SIZE 64
+
 /* What the frame's emitters come to, written by bdpt_generate.comp for bdpt_connect.comp. */
 struct rb_gpu_bdpt_emit_info {
     RB_VEC4(info); /* x: P_e, the chance a VPL is a point on an emitter rather than a VPL of a
@@ -103,7 +108,8 @@ struct rb_gpu_bdpt_mark_push {
     RB_UVEC4(region); /* the sub-image's first texel in the split images (x, y), its size */
 };
 
-/* Push constants of bdpt_connect.comp: one iteration of the loop, over one sub-image. */
+/* Push constants of bdpt_connect.comp (one iteration of the loop, over one sub-image) and
+ * bdpt_emitter_direct.comp (the whole split image). */
 struct rb_gpu_bdpt_connect_push {
     RB_UVEC4(index);   /* iteration k, whether VPL k exists (0/1), whether bundle k does, the
                         * strategies (RB_BDPT_MIS, _VPL, _BUNDLE) */
@@ -113,9 +119,7 @@ struct rb_gpu_bdpt_connect_push {
     RB_VEC4(params);   /* VPL bias, VPL map size, bundle grid size, node capacity */
     RB_UVEC4(bounce);  /* x: the index of VPL k's bounce (K_v + k), or RB_NONE where the frame
                         * has none; y: its bounce's (2 K_v + k), or RB_NONE; z: the bounce
-                        * VPLs' map size (the corner of their layers they fill); w: 1 in the
-                        * emitters' dispatch (every emitter point at every pixel), 0 in an
-                        * iteration */
+                        * VPLs' map size (the corner of their layers they fill); w: unused */
     RB_VEC4(frame);    /* x: the least roughness of a VPL's or a bundle hit's BRDF; y: K_v, the
                         * frame's VPLs; z: K_b, its bundles; w: n x n, its sub-images (floats) */
     RB_VEC4(offset);   /* xy: the cache's subpixel offset (pixels: its G-buffer's sample of a

@@ -143,7 +143,8 @@
 #define RB_BIND_BDPT_CONNECT_LIGHT 16 /* read and written: RB_BDPT_LIGHT_COUNT images */
 #define RB_BIND_BDPT_CONNECT_EMIT_INFO 20 /* rb_gpu_bdpt_emit_info */
 #define RB_BIND_BDPT_CONNECT_EMITTED 21 /* written by the emitters' dispatch: 2 images */
-#define RB_BIND_BDPT_CONNECT_COUNT 23
+#define RB_BIND_BDPT_CONNECT_LTC 23     /* the specular lobe's fits (RB_LTC_SIZE^2 vec4) */
+#define RB_BIND_BDPT_CONNECT_COUNT 24
 
 /* bdpt_gather.comp: the sub-images' light back to the image */
 #define RB_BIND_BDPT_GATHER_IN 0  /* RB_BDPT_LIGHT_COUNT images */

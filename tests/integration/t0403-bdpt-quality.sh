@@ -18,13 +18,16 @@
 # - the still, area-lit Cornell box once its caches are full: no 4x4 grid of the interleaved
 #   sub-images above 0.5% of the local brightness in the beauty, 1% in its direct and indirect
 #   layers (tests/tools/pattern; the plain mean over the filter's kernel left 15.8%), its steady
-#   state the same bits from frame to frame, within relMSE 0.0074 of a converged reference (0.0071;
-#   0.0077 with the caches at subpixel offsets, whose mean lit the ceiling's last row before the
-#   back wall at 1.8 times the reference, 1.3 at the centre; 0.0107 before every bundle's hit took
-#   all the emitter points and the filter's edges followed the slope) and its direct light
-#   within 0.0023 (0.0025 before the VPL maps' lift was bounded by the light quad's gap, 0.0032
-#   before the emitters' closed form; the room's concave edges once took their neighbour's light,
-#   and the direct light's box once blurred every contact shadow); the short
+#   state the same bits from frame to frame, within relMSE 0.0072 of a converged reference (0.0069;
+#   0.0071 before the emitters' specular light took its closed form; 0.0077 with the caches at
+#   subpixel offsets, whose mean lit the ceiling's last row before the back wall at 1.8 times the
+#   reference, 1.3 at the centre; 0.0107 before every bundle's hit took all the emitter points
+#   and the filter's edges followed the slope) and its direct light within 0.0018 (0.0015; 0.0021
+#   with the points' own specular light, which drew the ceiling beside the light quad a spot per
+#   point at half the reference; 0.0025 before the VPL maps' lift was bounded by the light
+#   quad's gap, 0.0032 before the emitters' diffuse closed form; the room's concave edges once
+#   took their neighbour's light, and the direct light's box once blurred every contact shadow),
+#   the ceiling beside the quad 23% off the reference on average (61% point by point); the short
 #   box's front face within 0.0025 (0.0048 while each bundle's hit saw one emitter point's hard
 #   shadow and carried it across the face as bands);
 #   a one-frame quick look shows that steady state; with fresh samples, frames 4-7 are within
@@ -98,8 +101,8 @@ if have_scene cornell-box/CornellBox.glb; then
         [ "$layer" = beauty ] && eb=$e
         [ "$layer" = direct ] && ed=$e
     done
-    check "the Cornell box is within relMSE 0.0074 of the reference ($eb)" \
-        awk "BEGIN { exit !($eb != \"\" && $eb < 0.0074) }"
+    check "the Cornell box is within relMSE 0.0072 of the reference ($eb)" \
+        awk "BEGIN { exit !($eb != \"\" && $eb < 0.0072) }"
     # The short box's front face (28x28 pixels from (64, 88)).
     for im in c/frame.0007 cr/frame.0007; do
         oiiotool "$T/$im.exr" --cut 28x28+64+88 -o "$T/$im.face.exr"
@@ -118,8 +121,22 @@ if have_scene cornell-box/CornellBox.glb; then
     # The light quad's points on its back light the ceiling beyond its edges through the 0.9-unit
     # gap; lifted off the ceiling by 4 texels' footprint, the ceiling farther than 58 units fell
     # behind their maps' hemispheres (0.0025; 0.0021 with the lift bounded by the gap).
-    check "the Cornell box's direct light is within relMSE 0.0023 of the reference ($ed)" \
-        awk "BEGIN { exit !($ed != \"\" && $ed < 0.0023) }"
+    # The light quad's back lights the ceiling beside it, seen at a grazing angle, mostly
+    # through the specular lobe: the points, a spot each, drew it at half the reference (relMSE
+    # 0.0021, the row's pixels 61% off on average); the lobe's fitted closed form draws it whole
+    # (0.0015, 22% off).
+    check "the Cornell box's direct light is within relMSE 0.0018 of the reference ($ed)" \
+        awk "BEGIN { exit !($ed != \"\" && $ed < 0.0018) }"
+    for x in $(seq 52 75); do
+        a=$("$BUILD/tests/tools/exrpixel" "$T/c/frame.0007.exr" "$x" 15 direct.G)
+        b=$("$BUILD/tests/tools/exrpixel" "$T/cr/frame.0007.exr" "$x" 15 direct.G)
+        echo "$a $b"
+    done >"$T/beside"
+    off=$(awk '$2 > 0 { d = $1 - $2; s += (d < 0 ? -d : d) / $2; k++ }
+        END { if (k == 24) printf "%.3f\n", s / k }' "$T/beside")
+    echo "# Cornell box, the ceiling beside the light quad (row 15): direct G off by $off on average"
+    check "the ceiling beside the light quad is within 35% of the reference on average ($off)" \
+        awk "BEGIN { exit !(\"$off\" != \"\" && $off < 0.35) }"
     # The ceiling's last row of pixels before the back wall (row 28, seen at a grazing angle):
     # its indirect light falls from 0.23 to 0.14 within that pixel. With the caches at subpixel
     # offsets (integrator.bdpt.subpixel spread) each read a point of the pixel's area, and their
@@ -157,7 +174,8 @@ if have_scene cornell-box/CornellBox.glb; then
     # falls by two orders of magnitude within a pixel: the emitters' closed form taken at the
     # caches' subpixel samples read several times the reference's pixel centre there (direct
     # relMSE 0.051), and the points alone drew spots (0.0049); at the pixels' centres, 0.0043;
-    # with every cache there, 0.0030; with the quad's back points seeing the ceiling, 0.0024.
+    # with every cache there, 0.0030; with the quad's back points seeing the ceiling, 0.0024;
+    # with the emitters' specular light in closed form, 0.0020.
     classic_cornell "$T/classic.yaml" "$box" 128x128 9 <<EOT
 default_light: off
 integrator: {name: bdpt}
@@ -170,8 +188,8 @@ EOT
     ec=$("$RB" compare "$T/cv/frame.0009.exr" "$T/cvr/frame.0009.exr" --layer direct --json |
         sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p')
     echo "# Cornell box, classic view: direct relMSE $ec"
-    check "the classic view's direct light is within relMSE 0.0027 of the reference ($ec)" \
-        awk "BEGIN { exit !(\"$ec\" != \"\" && $ec < 0.0027) }"
+    check "the classic view's direct light is within relMSE 0.0023 of the reference ($ec)" \
+        awk "BEGIN { exit !(\"$ec\" != \"\" && $ec < 0.0023) }"
 else
     skip "the Cornell box's quality" "$SCENES/cornell-box/CornellBox.glb is not there"
 fi
