@@ -53,38 +53,45 @@ float angle_of(float y, float x)
     return x < 0.0 ? RB_PI - r : r;
 }
 
+// Lambert's sum over a triangle whose corners q are given from the shading point, in a space
+// where the surface's normal is n: the triangle clipped to n . q > 0 (Sutherland-Hodgman, at most
+// 4 corners), then |sum theta_k n . (v_k x v_k+1) / |v_k x v_k+1||, v_k the corners' directions:
+// 2 pi times the normalised cosine's integral over the triangle, seen from either side.
+float lambert_sum(vec3 q[3], vec3 n)
+{
+    vec3 c[4];
+    int m = 0;
+    for (int k = 0; k < 3; k++) {
+        vec3 a = q[k], b = q[(k + 1) % 3];
+        float da = dot(n, a), db = dot(n, b);
+        if (da > 0.0)
+            c[m++] = a;
+        if ((da > 0.0) != (db > 0.0))
+            c[m++] = a + (b - a) * (da / (da - db));
+    }
+    if (m < 3)
+        return 0.0;
+    float s = 0.0;
+    for (int k = 0; k < m; k++) {
+        vec3 a = normalize(c[k]), b = normalize(c[(k + 1) % m]);
+        vec3 g = cross(a, b);
+        float len = length(g);
+        if (len > 1e-12)
+            s += angle_of(len, dot(a, b)) * dot(n, g) / len;
+    }
+    return abs(s);
+}
+
 // The irradiance at x (normal n) from the frame's emissive triangles, unshadowed, in closed form
-// (emit_info.tris, both sides emitting): each triangle clipped to x's upper half-space, then
-// Lambert's sum over its edges, E = L / 2 |sum theta_k n . (v_k x v_k+1) / |v_k x v_k+1||.
+// (emit_info.tris, both sides emitting): E = L / 2 times Lambert's sum.
 vec3 closed_form_irradiance(vec3 x, vec3 n)
 {
     vec3 sum = vec3(0.0);
     uint count = uint(emit_info.info.z);
     for (uint e = 0u; e < count; e++) {
-        vec3 p[3] = vec3[3](emit_info.tris[4u * e].xyz, emit_info.tris[4u * e + 1u].xyz,
-                            emit_info.tris[4u * e + 2u].xyz);
-        // Sutherland-Hodgman against the plane n . (q - x) = 0: at most 4 corners.
-        vec3 c[4];
-        int m = 0;
-        for (int k = 0; k < 3; k++) {
-            vec3 a = p[k], b = p[(k + 1) % 3];
-            float da = dot(n, a - x), db = dot(n, b - x);
-            if (da > 0.0)
-                c[m++] = a;
-            if ((da > 0.0) != (db > 0.0))
-                c[m++] = a + (b - a) * (da / (da - db));
-        }
-        if (m < 3)
-            continue;
-        float s = 0.0;
-        for (int k = 0; k < m; k++) {
-            vec3 a = normalize(c[k] - x), b = normalize(c[(k + 1) % m] - x);
-            vec3 g = cross(a, b);
-            float len = length(g);
-            if (len > 1e-12)
-                s += angle_of(len, dot(a, b)) * dot(n, g) / len;
-        }
-        sum += emit_info.tris[4u * e + 3u].rgb * (0.5 * abs(s));
+        vec3 q[3] = vec3[3](emit_info.tris[4u * e].xyz - x, emit_info.tris[4u * e + 1u].xyz - x,
+                            emit_info.tris[4u * e + 2u].xyz - x);
+        sum += emit_info.tris[4u * e + 3u].rgb * (0.5 * lambert_sum(q, n));
     }
     return sum;
 }
@@ -128,40 +135,20 @@ float ltc_density(ltc_lobe t, vec3 d)
 }
 
 // The integral of the lobe's density times the emitted radiance over the frame's emissive
-// triangles seen from x, unshadowed, in closed form: each triangle taken into the cosine's
-// space and clipped to its horizon, then Lambert's sum over its edges divided by 2 pi (the
-// cosine's normalisation); both sides emitting, as the irradiance's.
+// triangles seen from x, unshadowed, in closed form: each triangle taken into the cosine's space,
+// whose normal is z, then Lambert's sum divided by 2 pi; both sides emitting, as the
+// irradiance's.
 vec3 ltc_emitters(ltc_lobe t, vec3 x)
 {
     vec3 sum = vec3(0.0);
     uint count = uint(emit_info.info.z);
     for (uint k = 0u; k < count; k++) {
-        vec3 p[3];
+        vec3 q[3];
         for (int j = 0; j < 3; j++) {
-            vec3 q = emit_info.tris[4u * k + uint(j)].xyz - x;
-            p[j] = vec3(dot(t.r0, q), dot(t.r1, q), dot(t.r2, q));
+            vec3 d = emit_info.tris[4u * k + uint(j)].xyz - x;
+            q[j] = vec3(dot(t.r0, d), dot(t.r1, d), dot(t.r2, d));
         }
-        // Sutherland-Hodgman against z = 0: at most 4 corners.
-        vec3 c[4];
-        int cm = 0;
-        for (int j = 0; j < 3; j++) {
-            vec3 a = p[j], b = p[(j + 1) % 3];
-            if (a.z > 0.0)
-                c[cm++] = a;
-            if ((a.z > 0.0) != (b.z > 0.0))
-                c[cm++] = a + (b - a) * (a.z / (a.z - b.z));
-        }
-        if (cm < 3)
-            continue;
-        float s = 0.0;
-        for (int j = 0; j < cm; j++) {
-            vec3 a = normalize(c[j]), b = normalize(c[(j + 1) % cm]);
-            vec3 g = cross(a, b);
-            float len = length(g);
-            if (len > 1e-12)
-                s += angle_of(len, dot(a, b)) * g.z / len;
-        }
-        sum += emit_info.tris[4u * k + 3u].rgb * abs(s);
+        sum += emit_info.tris[4u * k + 3u].rgb * lambert_sum(q, vec3(0.0, 0.0, 1.0));
     }
     return sum / (2.0 * RB_PI);
 }
@@ -237,7 +224,8 @@ void emitters(ivec2 sp)
         uint s = uint((sp.y / sub.y) * n + sp.x / sub.x);
         float n_b = float(rb_bdpt_share(k_b, s, count)), n_a = pc.frame.y;
         bool closed = closed_form();
-        ltc_lobe lobe = closed ? ltc_at(n1, v1, rough) : ltc_lobe(vec3(0.0), vec3(0.0), vec3(0.0), 0.0);
+        ltc_lobe lobe = closed ? ltc_at(n1, v1, rough)
+                               : ltc_lobe(vec3(0.0), vec3(0.0), vec3(0.0), 0.0);
         vec3 shadowed = vec3(0.0), unshadowed = vec3(0.0);
         vec3 fitted = vec3(0.0), specular_seen = vec3(0.0);
         for (uint j = 0u; j < k_v; j++) {
