@@ -47,10 +47,8 @@ for at in 3:0.0085 4:0.0075 5:0.0070 6:0.0052 11:0.0055 22:0.0080 23:0.0068; do
     f=${at%%:*} bound=${at#*:}
     name=$(printf 'frame.%04d.exr' "$f")
     tap_run "$BUILD/tests/tools/exrstat" "$T/d/$name" indirect.G 0.01
-    e=$("$RB" compare "$T/d/$name" "$T/r/$name" --json |
-        sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p')
-    ei=$("$RB" compare "$T/d/$name" "$T/r/$name" --layer indirect --json |
-        sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p')
+    e=$(relmse "$T/d/$name" "$T/r/$name")
+    ei=$(relmse "$T/d/$name" "$T/r/$name" indirect)
     echo "# demo frame $f: relMSE $e (indirect $ei)"
     check "demo frame $f is within relMSE 0.03 of the reference ($e)" \
         awk "BEGIN { exit !($e != \"\" && $e < 0.03) }"
@@ -98,8 +96,7 @@ if have_scene cornell-box/CornellBox.glb; then
         --set integrator.reference.paths=bdpt --out "$T/cr"
     expect_exit 0 "the reference renders the Cornell box at 2048 samples a pixel"
     for layer in beauty direct indirect; do
-        e=$("$RB" compare "$T/c/frame.0007.exr" "$T/cr/frame.0007.exr" --layer $layer --json |
-            sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p')
+        e=$(relmse "$T/c/frame.0007.exr" "$T/cr/frame.0007.exr" "$layer")
         echo "# Cornell box, caches full: $layer relMSE $e"
         [ "$layer" = beauty ] && eb=$e
         [ "$layer" = direct ] && ed=$e
@@ -110,8 +107,7 @@ if have_scene cornell-box/CornellBox.glb; then
     for im in c/frame.0007 cr/frame.0007; do
         oiiotool "$T/$im.exr" --cut 28x28+64+88 -o "$T/$im.face.exr"
     done
-    ef=$("$RB" compare "$T/c/frame.0007.face.exr" "$T/cr/frame.0007.face.exr" --json |
-        sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p')
+    ef=$(relmse "$T/c/frame.0007.face.exr" "$T/cr/frame.0007.face.exr")
     echo "# Cornell box, the short box's front face: relMSE $ef"
     check "the short box's front face is within relMSE 0.0025 of the reference ($ef)" \
         awk "BEGIN { exit !(\"$ef\" != \"\" && $ef < 0.0025) }"
@@ -169,8 +165,7 @@ if have_scene cornell-box/CornellBox.glb; then
         --set integrator.bdpt.samples=fresh
     expect_exit 0 "bdpt renders the Cornell box with fresh samples"
     for f in 4 5 6 7; do
-        e=$("$RB" compare "$T/f/frame.000$f.exr" "$T/cr/frame.0007.exr" --json |
-            sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p')
+        e=$(relmse "$T/f/frame.000$f.exr" "$T/cr/frame.0007.exr")
         check "fresh samples, frame $f: within relMSE 0.03 of the reference ($e)" \
             awk "BEGIN { exit !($e != \"\" && $e < 0.03) }"
     done
@@ -191,8 +186,7 @@ EOT
     rb reference "$T/classic.yaml" --frames 9 --spp 1024 -q \
         --set integrator.reference.paths=bdpt --out "$T/cvr"
     expect_exit 0 "the reference renders the classic view at 1024 samples a pixel"
-    ec=$("$RB" compare "$T/cv/frame.0009.exr" "$T/cvr/frame.0009.exr" --layer direct --json |
-        sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p')
+    ec=$(relmse "$T/cv/frame.0009.exr" "$T/cvr/frame.0009.exr" direct)
     echo "# Cornell box, classic view: direct relMSE $ec"
     check "the classic view's direct light is within relMSE 0.0017 of the reference ($ec)" \
         awk "BEGIN { exit !(\"$ec\" != \"\" && $ec < 0.0017) }"
@@ -210,8 +204,7 @@ EOT
     rb reference "$T/metal.glb" --size 128x128 --frames 7 --spp 1024 -q \
         --set integrator.reference.paths=bdpt --out "$T/mr"
     expect_exit 0 "the reference renders the metal Cornell box at 1024 samples a pixel"
-    em=$("$RB" compare "$T/m/frame.0007.exr" "$T/mr/frame.0007.exr" --layer direct --json |
-        sed -n 's/.*"relmse": \([0-9.e+-]*\).*/\1/p')
+    em=$(relmse "$T/m/frame.0007.exr" "$T/mr/frame.0007.exr" direct)
     echo "# the metal Cornell box: direct relMSE $em"
     check "the metal box's direct light is within relMSE 0.0007 of the reference ($em)" \
         awk "BEGIN { exit !(\"$em\" != \"\" && $em < 0.0007) }"
