@@ -23,8 +23,9 @@
  * both (balance heuristic), as the paper's fit does. Each roughness starts at normal incidence
  * from the next rougher one's fit, then each row from the last; the normal-incidence column is
  * fitted first, in order, and then the roughnesses are independent and run on threads, so the
- * output does not depend on their count. Every loop runs in a fixed order: the same libm, the same
- * bits.
+ * output does not depend on their count. The nearly mirror-like roughnesses below MIRROR start
+ * each row from MIRROR's fit instead, scaled to their width (fit_mirror_column). Every loop runs
+ * in a fixed order: the same libm, the same bits.
  *
  * Usage: ltcfit OUT                  writes the whole table
  *        ltcfit --check FILE R...    refits the roughness columns R (0 to SIZE - 1) and compares
@@ -43,6 +44,7 @@
 #define AVG_SAMPLES 128 /* per axis, for the lobe's integrals */
 #define MAX_ITERATIONS 100
 #define THREADS 8
+#define STEP 0.05 /* the simplex's side */
 
 struct vec3 {
     double x, y, z;
@@ -228,10 +230,10 @@ static double objective(struct ltc *t, const double x[3], int isotropic, struct 
 
 /* Nelder-Mead from start, with a simplex of side delta, until the values' spread is under
  * tolerance or MAX_ITERATIONS; leaves the best point in t. */
-static void fit(struct ltc *t, struct vec3 v, double alpha, int isotropic)
+static void fit(struct ltc *t, struct vec3 v, double alpha, int isotropic, double delta)
 {
     enum { DIM = 3 };
-    const double delta = 0.05, tolerance = 1e-5;
+    const double tolerance = 1e-5;
     double p[DIM + 1][DIM], f[DIM + 1];
     double start[DIM] = {t->m11, t->m22, t->m13};
     for (int i = 0; i <= DIM; i++) {
@@ -332,7 +334,7 @@ static void fit_normal_column(void)
         t.m22 = t.m11;
         t.m13 = 0.0;
         ltc_update(&t);
-        fit(&t, v, alpha, 1);
+        fit(&t, v, alpha, 1, STEP);
         normal_fits[r] = t;
         store(0, r, &t);
     }
@@ -350,7 +352,34 @@ static void fit_column(int r)
         if (row == 1)
             t.m13 = mean.x / fmax(mean.z, 1e-3) * t.m11;
         ltc_update(&t);
-        fit(&t, v, alpha, 0);
+        fit(&t, v, alpha, 0, STEP);
+        store(row, r, &t);
+    }
+}
+
+/* Below MIRROR's roughness (alpha 1e-4 to 0.006) the search from the next rougher fit did not
+ * find the lobe: the simplex's first step of 0.05 lands far out in the cosine's tail, and those
+ * fits came out tens to thousands of times too wide at some view angles and not at the next (a
+ * mirror's fireflies, where the emitters' ratio divided by a density that missed the lobe's
+ * peak). There the lobe is near its mirror limit, as the fits from MIRROR up show: its shape at
+ * a view angle (m00 and m02 over m11) hardly changes with alpha, and its width (m22) is
+ * proportional to alpha. So each row starts from MIRROR's fit, its width scaled down, and the
+ * search steps in the lobe's own scale, a twentieth of m11. */
+#define MIRROR 6
+
+static void fit_mirror_column(int r)
+{
+    double alpha = roughness_alpha(r), ratio = alpha / roughness_alpha(MIRROR);
+    for (int row = 0; row < SIZE; row++) {
+        const float *from = table[row * SIZE + MIRROR];
+        double m22 = from[3] * ratio, m11 = m22 / from[0];
+        struct ltc t = {.m11 = m11, .m22 = m22, .m13 = -from[1] / from[0]};
+        ltc_update(&t);
+        if (row > 0) {
+            struct vec3 v = view_at(row), mean;
+            lobe_moments(v, alpha, &t.norm, &mean);
+            fit(&t, v, alpha, 0, STEP * m11);
+        }
         store(row, r, &t);
     }
 }
@@ -363,14 +392,19 @@ struct job {
 static void *worker(void *arg)
 {
     const struct job *j = arg;
-    for (int i = j->first; i < j->count; i += j->stride)
-        fit_column(j->columns[i]);
+    for (int i = j->first; i < j->count; i += j->stride) {
+        int r = j->columns[i];
+        if (r < MIRROR)
+            fit_mirror_column(r);
+        else
+            fit_column(r);
+    }
     return NULL;
 }
 
-static int fit_columns(const int *columns, int count)
+/* The columns on up to THREADS threads; 1 when a thread could not start. */
+static int run_columns(const int *columns, int count)
 {
-    fit_normal_column();
     pthread_t threads[THREADS];
     struct job jobs[THREADS];
     int started = 0;
@@ -385,6 +419,24 @@ static int fit_columns(const int *columns, int count)
     for (int i = 0; i < started; i++)
         pthread_join(threads[i], NULL);
     return started == (count < THREADS ? count : THREADS) ? 0 : 1;
+}
+
+/* The columns asked for: those from MIRROR up first (and MIRROR itself when one below it is
+ * asked for), then those below, which start from MIRROR's. */
+static int fit_columns(const int *columns, int count)
+{
+    fit_normal_column();
+    int rough[SIZE], smooth[SIZE], n_rough = 0, n_smooth = 0, has_mirror = 0;
+    for (int i = 0; i < count; i++) {
+        if (columns[i] >= MIRROR)
+            rough[n_rough++] = columns[i];
+        else
+            smooth[n_smooth++] = columns[i];
+        has_mirror |= columns[i] == MIRROR;
+    }
+    if (n_smooth > 0 && !has_mirror)
+        rough[n_rough++] = MIRROR;
+    return run_columns(rough, n_rough) || run_columns(smooth, n_smooth) ? 1 : 0;
 }
 
 static int write_table(const char *path)
