@@ -473,6 +473,7 @@ static enum rb_status create(struct rb_integrator *it, void **state, struct rb_e
         .clamp_g = job->clamp / (diag * diag),
         .vpl_bias = job->vpl_bias,
         .min_roughness = job->min_roughness,
+        .vpl_spread = job->vpl_spread,
         .strategies = job->strategies ? job->strategies : RB_BDPT_STRATEGIES_MIS,
         .scene_centre = {0.5f * (lo.x + hi.x), 0.5f * (lo.y + hi.y), 0.5f * (lo.z + hi.z)},
         .scene_radius = 0.5f * diag,

@@ -229,6 +229,9 @@ static const struct key keys[] = {
       "weight), in units of one over the scene diagonal squared; 0: no clamp"),
     K("integrator.bdpt.vpl_bias", KT_FLOAT, JOB(integrator.bdpt.vpl_bias), 0, NOHI, "0.01", 0,
       "bdpt: VPL shadow-map depth bias as a fraction of the distance to the VPL"),
+    K("integrator.bdpt.vpl_spread", KT_FLOAT, JOB(integrator.bdpt.vpl_spread), 0, NOHI, "1", 0,
+      "bdpt: a VPL lights as a disk of this many times the area it stands for among the frame's "
+      "VPLs (it trades a spot beside a VPL for light lost there); 0: as a point"),
     K("integrator.bdpt.min_roughness", KT_FLOAT, JOB(integrator.bdpt.min_roughness), 0, 1, "0.5", 0,
       "bdpt: least roughness of the BRDF at a VPL and where a bundle lands (not at the camera's "
       "surface): a glossy VPL throws a bright spot; raising this trades the spot for a bias; 0: "
@@ -1467,6 +1470,7 @@ void rb_job_rehash(struct rb_job *job)
         h = h_f32(h, b->clamp);
         h = h_f32(h, b->vpl_bias);
         h = h_f32(h, b->min_roughness);
+        h = h_f32(h, b->vpl_spread);
         h = h_u32(h, b->view_triangles);
         h = h_u32(h, (uint32_t)b->strategies);
         h = h_u32(h, b->caches);

@@ -183,6 +183,8 @@ struct rb_job {
             float vpl_bias;            /* VPL shadow-map depth bias, fraction of distance */
             float min_roughness;       /* the least roughness of the BRDF at a VPL or a bundle's
                                         * hit (path regularization); 0: as the material has it */
+            float vpl_spread;          /* a VPL's disk, in the areas it stands for among the
+                                        * frame's VPLs; 0: a point; default 1 */
             uint32_t view_triangles;   /* triangle budget of the small views' simplified mesh;
                                         * 0: the full mesh; default 50000 */
             enum rb_bdpt_strategies strategies;

@@ -474,6 +474,7 @@ void rb_pass_bdpt_connect_record(struct rb_pass_bdpt *p, VkCommandBuffer cmd,
         .bounce = {b->has_bounce && k < b->vpl_count ? b->vpl_count + k : RB_NONE,
                    b->has_chain && k < b->vpl_count ? 2 * b->vpl_count + k : RB_NONE,
                    b->bounce_vpl_size_px, 0},
+        .offset = {0.0f, 0.0f, b->vpl_spread, 0.0f},
     };
     frame_counts(b, pc.frame);
     push(cmd, &p->connect, &pc, sizeof(pc));

@@ -389,6 +389,7 @@ struct rb_bdpt_frame {
     float clamp_g;       /* the bound on G of a VPL connection, in 1/m^2; 0: none */
     float vpl_bias;      /* fraction of the distance */
     float min_roughness; /* the least roughness at a VPL and a bundle's hit (bdpt_vpl.glsl) */
+    float vpl_spread;    /* a VPL's disk, in the areas it stands for among the frame's K_v */
     enum rb_bdpt_strategies strategies;
     float scene_centre[3], scene_radius; /* the job's bounds */
     uint32_t emitter_count;              /* emissive triangles */

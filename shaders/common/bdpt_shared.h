@@ -123,7 +123,8 @@ struct rb_gpu_bdpt_connect_push {
     RB_VEC4(frame);    /* x: the least roughness of a VPL's or a bundle hit's BRDF; y: K_v, the
                         * frame's VPLs; z: K_b, its bundles; w: n x n, its sub-images (floats) */
     RB_VEC4(offset);   /* xy: the cache's subpixel offset (pixels: its G-buffer's sample of a
-                        * pixel lies at the pixel's centre plus this); zw: unused */
+                        * pixel lies at the pixel's centre plus this; emitter_direct); z: a
+                        * VPL's disk, in the areas it stands for (connect's (a)); w: unused */
 };
 
 /* Push constants of bdpt_emitters.comp. */

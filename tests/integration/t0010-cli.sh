@@ -103,7 +103,7 @@ check "help job camera lists only camera.* keys" \
 rb help job integrator.bdpt.v
 check "help job takes any prefix of a dotted path" \
     test "$(grep '^[a-z]' "$T/stdout" | cut -d' ' -f1 | sort | tr '\n' ' ')" = \
-    "integrator.bdpt.view_triangles integrator.bdpt.vpl_bias integrator.bdpt.vpl_size integrator.bdpt.vpls "
+    "integrator.bdpt.view_triangles integrator.bdpt.vpl_bias integrator.bdpt.vpl_size integrator.bdpt.vpl_spread integrator.bdpt.vpls "
 rb help job camra
 expect_exit 2 "help job with a prefix no key has exits 2"
 check "help job camra: did you mean 'camera'" \

@@ -621,6 +621,7 @@ static void test_hash(void **state)
         {{"integrator.name", "direct", NULL}},
         {{"integrator.bdpt.vpl_bias", "0.02", NULL}},
         {{"integrator.bdpt.min_roughness", "0.6", NULL}},
+        {{"integrator.bdpt.vpl_spread", "2", NULL}},
     };
     for (size_t i = 0; i < sizeof(changes) / sizeof(changes[0]); i++) {
         if (hash_of(text, changes[i], 1) == base)
