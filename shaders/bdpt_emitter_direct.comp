@@ -233,9 +233,7 @@ void emitters(ivec2 sp)
                 continue;
             vec3 l;
             float r2, vis;
-            float spread = pc.frame.y > 0.0 && vpls[j].normal.w > 0.0
-                               ? 1.0 / (RB_PI * n_a * vpls[j].normal.w)
-                               : 0.0;
+            float spread = vpl_area(j);
             vec3 x = from_vpl_unshadowed(j, x1, n1, ng1, strategies == RB_BDPT_VPL, spread, l, r2,
                                          vis);
             if (!any(greaterThan(x, vec3(0.0))))

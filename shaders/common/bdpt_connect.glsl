@@ -124,12 +124,23 @@ vec3 from_vpl_unshadowed(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, float sp
     return vpl_brdf(z, -l) * z.power.rgb * geo;
 }
 
-// The same, shadowed (times V) and without spread.
-vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, out vec3 l, out float r2)
+// The same, shadowed (times V).
+vec3 from_vpl(uint k, vec3 p, vec3 n, vec3 ng, bool clamp_g, float spread, out vec3 l,
+              out float r2)
 {
     float vis;
-    vec3 x = from_vpl_unshadowed(k, p, n, ng, clamp_g, 0.0, l, r2, vis);
+    vec3 x = from_vpl_unshadowed(k, p, n, ng, clamp_g, spread, l, r2, vis);
     return vis > 0.0 ? x : vec3(0.0);
+}
+
+// a / pi for VPL k's disk of the area it stands for among the frame's K_v VPLs, a = 1 / (K_v p)
+// (p its area density, normal.w): the emitters' points light as such disks in their direct light
+// (bdpt_emitter_direct.comp), and every VPL does as vpl_spread of them under mis (vpl_disk).
+float vpl_area(uint k)
+{
+    return pc.frame.y > 0.0 && vpls[k].normal.w > 0.0
+               ? 1.0 / (RB_PI * pc.frame.y * vpls[k].normal.w)
+               : 0.0;
 }
 
 // The direction l from x toward punctual light L, its attenuation there (falloff and spot cone),
@@ -220,9 +231,7 @@ void add(inout vec3 diffuse, inout vec3 specular, vec3 n, vec3 v, vec3 l, vec3 f
 // VPLs and bundles), which is what comparing the strategies is for.
 float vpl_disk(uint j)
 {
-    return pc.index.w == RB_BDPT_MIS && vpls[j].normal.w > 0.0
-               ? pc.offset.z / (RB_PI * pc.frame.y * vpls[j].normal.w)
-               : 0.0;
+    return pc.index.w == RB_BDPT_MIS ? pc.offset.z * vpl_area(j) : 0.0;
 }
 
 // (a) for VPL j: its light at x1 (lighting as a disk, vpl_disk), weighed by MIS against the
@@ -241,9 +250,9 @@ void from_vpl_at_x1(uint j, vec3 x1, vec3 n1, vec3 ng1, vec3 v1, vec3 f0, float 
     uint strategies = pc.index.w;
     float n_a = pc.counts.x;
     vec3 l;
-    float r2, vis;
-    vec3 x = from_vpl_unshadowed(j, x1, n1, ng1, strategies == RB_BDPT_VPL, vpl_disk(j), l, r2, vis);
-    if (!(vis > 0.0) || !any(greaterThan(x, vec3(0.0))))
+    float r2;
+    vec3 x = from_vpl(j, x1, n1, ng1, strategies == RB_BDPT_VPL, vpl_disk(j), l, r2);
+    if (!any(greaterThan(x, vec3(0.0))))
         return;
     float w = 1.0;
     if (strategies == RB_BDPT_MIS) {
@@ -275,9 +284,8 @@ vec3 at_bundle_hit(uint j, vec3 z1, vec3 nz, vec3 dir, rb_bundle_hit h, float co
     vec3 l;
     float r2;
     w = 1.0;
-    float vis;
-    vec3 x = from_vpl_unshadowed(j, z1, nz, nz, false, vpl_disk(j), l, r2, vis);
-    if (!(vis > 0.0) || !any(greaterThan(x, vec3(0.0))))
+    vec3 x = from_vpl(j, z1, nz, nz, false, vpl_disk(j), l, r2);
+    if (!any(greaterThan(x, vec3(0.0))))
         return vec3(0.0);
     x *= surface_brdf(nz, -dir, l, h.m);
     if (mis) {

@@ -124,7 +124,8 @@ struct rb_gpu_bdpt_connect_push {
                         * frame's VPLs; z: K_b, its bundles; w: n x n, its sub-images (floats) */
     RB_VEC4(offset);   /* xy: the cache's subpixel offset (pixels: its G-buffer's sample of a
                         * pixel lies at the pixel's centre plus this; emitter_direct); z: a
-                        * VPL's disk, in the areas it stands for (connect's (a)); w: unused */
+                        * VPL's disk, in the areas it stands for (connect's (a) and (c));
+                        * w: unused */
 };
 
 /* Push constants of bdpt_emitters.comp. */

@@ -246,40 +246,36 @@ EOT
     echo "# Cornell box, classic view: direct relMSE $ec"
     check "the classic view's direct light is within relMSE 0.0017 of the reference ($ec)" \
         awk "BEGIN { exit !(\"$ec\" != \"\" && $ec < 0.0017) }"
-    # The box in metal of roughness 0.1 (its materials' factors rewritten in place, the same
-    # length): glossy surfaces take the area light through a narrow lobe, which the emitter
-    # points drew a point at a time (direct relMSE 0.0013) and the lobe's fitted closed form
-    # draws whole (0.0004).
-    perl -0777 -pe \
-        's/"metallicFactor":0,"roughnessFactor":0.5/"metallicFactor":1,"roughnessFactor":0.1/g' \
-        "$box" >"$T/metal.glb"
-    check "the metal box differs from the box in its materials alone" \
-        sh -c "[ \$(cmp -l \"$box\" \"$T/metal.glb\" | wc -l) -eq 10 ]"
-    rb render "$T/metal.glb" --integrator bdpt --size 128x128 --frames 0-7 -q --out "$T/m"
-    expect_exit 0 "bdpt renders the metal Cornell box"
-    rb reference "$T/metal.glb" --size 128x128 --frames 7 --spp 1024 -q \
-        --set integrator.reference.paths=bdpt --out "$T/mr"
-    expect_exit 0 "the reference renders the metal Cornell box at 1024 samples a pixel"
-    em=$(relmse "$T/m/frame.0007.exr" "$T/mr/frame.0007.exr" direct)
-    echo "# the metal Cornell box: direct relMSE $em"
-    check "the metal box's direct light is within relMSE 0.0007 of the reference ($em)" \
-        awk "BEGIN { exit !(\"$em\" != \"\" && $em < 0.0007) }"
-    # And as mirrors (roughness 0): the lobe's fit near a mirror once came out tens of times too
-    # wide at some view angles, and the emitters' ratio divided the lobe's light at a point by
-    # that fit's density there: 29 pixels of direct light above 100, up to 8971, where the
-    # reference's highest is the quad's own 100 (relMSE 84775; 1.2e-6 since).
-    perl -0777 -pe \
-        's/"metallicFactor":0,"roughnessFactor":0.5/"metallicFactor":1,"roughnessFactor":0.0/g' \
-        "$box" >"$T/mirror.glb"
-    rb render "$T/mirror.glb" --integrator bdpt --size 128x128 --frames 0-7 -q --out "$T/mm"
-    expect_exit 0 "bdpt renders the mirror Cornell box"
-    rb reference "$T/mirror.glb" --size 128x128 --frames 7 --spp 1024 -q \
-        --set integrator.reference.paths=bdpt --out "$T/mmr"
-    expect_exit 0 "the reference renders the mirror Cornell box at 1024 samples a pixel"
-    ek=$(relmse "$T/mm/frame.0007.exr" "$T/mmr/frame.0007.exr" direct)
-    echo "# the mirror Cornell box: direct relMSE $ek"
-    check "the mirror box's direct light is within relMSE 0.0007 of the reference ($ek)" \
-        awk "BEGIN { exit !(\"$ek\" != \"\" && $ek < 0.0007) }"
+    # metal_box ROUGHNESS NAME: the box in metal of that roughness (its materials' factors
+    # rewritten in place, the same length) as $T/NAME.glb, rendered by bdpt (frames 0-7) and by
+    # the reference (frame 7, 1024 samples a pixel), and the direct light's relMSE between them
+    # checked against 0.0007.
+    metal_box() {
+        _r=$1 _name=$2
+        perl -0777 -pe \
+            "s/\"metallicFactor\":0,\"roughnessFactor\":0.5/\"metallicFactor\":1,\"roughnessFactor\":$_r/g" \
+            "$box" >"$T/$_name.glb"
+        check "the $_name box differs from the box in its materials alone" \
+            sh -c "[ \$(cmp -l \"$box\" \"$T/$_name.glb\" | wc -l) -eq 10 ]"
+        rb render "$T/$_name.glb" --integrator bdpt --size 128x128 --frames 0-7 -q --out "$T/$_name"
+        expect_exit 0 "bdpt renders the $_name Cornell box"
+        rb reference "$T/$_name.glb" --size 128x128 --frames 7 --spp 1024 -q \
+            --set integrator.reference.paths=bdpt --out "$T/$_name-ref"
+        expect_exit 0 "the reference renders the $_name Cornell box at 1024 samples a pixel"
+        _e=$(relmse "$T/$_name/frame.0007.exr" "$T/$_name-ref/frame.0007.exr" direct)
+        echo "# the $_name Cornell box: direct relMSE $_e"
+        check "the $_name box's direct light is within relMSE 0.0007 of the reference ($_e)" \
+            awk "BEGIN { exit !(\"$_e\" != \"\" && $_e < 0.0007) }"
+    }
+    # In metal of roughness 0.1: glossy surfaces take the area light through a narrow lobe, which
+    # the emitter points drew a point at a time (direct relMSE 0.0013) and the lobe's fitted
+    # closed form draws whole (0.0004).
+    metal_box 0.1 metal
+    # As mirrors (roughness 0): the lobe's fit near a mirror once came out tens of times too wide
+    # at some view angles, and the emitters' ratio divided the lobe's light at a point by that
+    # fit's density there: 29 pixels of direct light above 100, up to 8971, where the reference's
+    # highest is the quad's own 100 (relMSE 84775; 1.2e-6 since).
+    metal_box 0.0 mirror
 else
     skip "the Cornell box's quality" "$SCENES/cornell-box/CornellBox.glb is not there"
 fi
