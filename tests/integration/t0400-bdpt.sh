@@ -100,6 +100,9 @@ check "indirect light converges: 128 samples have under half the relMSE of 8 ($e
     awk "BEGIN { exit !($e128 < $e8 / 2) }"
 check "with 128 samples the indirect relMSE is under 0.05 ($e128)" awk "BEGIN { exit !($e128 < 0.05) }"
 mr=$(mean "$T/r")
+# Within 5%: the bundles alone read 10% under the reference (0.1682 against 0.1868) while their
+# hits took the depth their node's texel centre has, half the time behind a slanted surface and
+# shadowed from its lights (on_own_line, common/bdpt_connect.glsl); 2.9% under on x1's own line.
 for s in mis vpl bundle; do
     # shellcheck disable=SC2046
     rb render "$demo" $small $maps --integrator bdpt $(k 128) --out "$T/$s" \
@@ -107,8 +110,8 @@ for s in mis vpl bundle; do
     expect_exit 0 "bdpt with strategies $s"
     m=$(mean "$T/$s")
     echo "# strategies $s: mean indirect green $m, the reference's $mr"
-    check "strategies $s: the mean indirect light is within 10% of the reference's ($m, $mr)" \
-        awk "BEGIN { d = $m - $mr; if (d < 0) d = -d; exit !(d < 0.1 * $mr) }"
+    check "strategies $s: the mean indirect light is within 5% of the reference's ($m, $mr)" \
+        awk "BEGIN { d = $m - $mr; if (d < 0) d = -d; exit !(d < 0.05 * $mr) }"
 done
 check "MIS has the lowest relMSE of the three strategies" \
     awk "BEGIN { exit !($(relmse "$T/mis") <= $(relmse "$T/vpl") && $(relmse "$T/mis") <= $(relmse "$T/bundle")) }"
