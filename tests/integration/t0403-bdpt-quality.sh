@@ -26,7 +26,9 @@
 # - the still, area-lit Cornell box once its caches are full: no 4x4 grid of the interleaved
 #   sub-images above 0.5% of the local brightness in the beauty, 1% in its direct and indirect
 #   layers (tests/tools/pattern; the plain mean over the filter's kernel left 15.8%), its steady
-#   state the same bits from frame to frame, within relMSE 0.0070 of a converged reference (0.0067;
+#   state the same bits from frame to frame, within relMSE 0.0064 of a converged reference (0.0062;
+#   0.0065 before a bounce's disk took its parent's area and a lobe reflecting a disk widened;
+#   0.0067
 #   0.0071 before the emitters' specular light took its closed form; 0.0077 with the caches at
 #   subpixel offsets, whose mean lit the ceiling's last row before the back wall at 1.8 times the
 #   reference, 1.3 at the centre; 0.0107 before every bundle's hit took all the emitter points
@@ -157,8 +159,23 @@ if have_scene cornell-box/CornellBox.glb; then
         [ "$layer" = beauty ] && eb=$e
         [ "$layer" = direct ] && ed=$e
     done
-    check "the Cornell box is within relMSE 0.0070 of the reference ($eb)" \
-        awk "BEGIN { exit !($eb != \"\" && $eb < 0.0070) }"
+    check "the Cornell box is within relMSE 0.0064 of the reference ($eb)" \
+        awk "BEGIN { exit !($eb != \"\" && $eb < 0.0064) }"
+    # Fresh samples: every fourth frame has four new caches. Frames 70-73 once held a blotch of
+    # indirect 1.4 to 3.0 on the ceiling beside the light quad (relMSE 0.054), from a bounce's
+    # bounce on the quad's back lighting it as a point through the ceiling's own lobe at a grazing
+    # angle; the others measured 0.0054 to 0.0106.
+    rb render "$box" --integrator bdpt --size 128x128 --frames 0-75 -q --out "$T/cf" \
+        --set integrator.bdpt.samples=fresh
+    expect_exit 0 "bdpt renders the Cornell box's frames 0-75 with fresh samples"
+    worst=0
+    for f in $(seq 7 4 75); do
+        e=$(relmse "$T/cf/frame.$(printf %04d "$f").exr" "$T/cr/frame.0007.exr")
+        worst=$(awk "BEGIN { print ($e > $worst) ? $e : $worst }")
+    done
+    echo "# Cornell box, fresh samples, frames 7 to 75 by 4: worst relMSE $worst"
+    check "no frame of fresh samples holds a blotch (worst relMSE $worst < 0.02)" \
+        awk "BEGIN { exit !($worst < 0.02) }"
     # The short box's front face (28x28 pixels from (64, 88)).
     for im in c/frame.0007 cr/frame.0007; do
         oiiotool "$T/$im.exr" --cut 28x28+64+88 -o "$T/$im.face.exr"
