@@ -74,7 +74,7 @@ void main()
                 rb_bundle_search(bundle_views[k], int(pc.params.z), uint(pc.params.w), x1, s);
             float scale = cos1 * 2.0 * RB_PI;
             if (h.found)
-                h.t = on_own_line(bundle_views[k], int(pc.params.z), x1, s, h);
+                h.t = rb_bundle_on_own_line(bundle_views[k], int(pc.params.z), x1, s, h);
             if (!h.found) {
                 add(dd, ds, n1, v1, dir, f0, f90, rough, environment(dir) * (scale / n_b));
             } else {

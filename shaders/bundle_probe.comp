@@ -20,7 +20,8 @@ layout(std430, binding = RB_BIND_BUNDLE_PROBE_NODES) readonly buffer Nodes { rb_
 // One entry per pixel, in rows, after a copy of the bundle's view.
 struct entry {
     vec4 origin; // x1 and s, the side connect leaves by (0: no surface at the pixel)
-    vec4 t;      // the distance to the hit along s d, then along -s d (-1: none); unused
+    vec4 t;      // the distance to the hit along s d, then along -s d (-1: none); along s d on
+                 // x1's own line (rb_bundle_on_own_line, connect's distance); unused
     uvec4 node;  // the hits' normal words (s d, -s d), then their node indices
 };
 layout(std430, binding = RB_BIND_BUNDLE_PROBE_OUT) writeonly buffer Out
@@ -58,6 +59,8 @@ void main()
         rb_bundle_hit h = rb_bundle_search(v, int(pc.size), pc.capacity, x1, i == 0 ? s : -s);
         if (h.found) {
             o.t[i] = h.t;
+            if (i == 0)
+                o.t[2] = rb_bundle_on_own_line(v, int(pc.size), x1, s, h);
             o.node[i] = nodes[h.node].normal;
             o.node[2 + i] = h.node;
         }

@@ -67,4 +67,29 @@ rb_bundle_hit rb_bundle_search(rb_gpu_view v, int size, uint capacity, vec3 x1, 
     return h;
 }
 
+// The distance along x1's own line to the surface of the hit that the search found for x1
+// along bundle v (size texels) on side s: the search takes the node's depth, which the
+// rasterizer sampled at its texel's centre, up to half a texel's diagonal beside x1's line; on a
+// surface at a slant to the bundle that depth is off by that times the slant, and z1, half the
+// time behind its surface, was shadowed from the lights it faces. Here the node's plane (its
+// normal through the centre's sample) meets x1's line: delta from the centre's depth, at most two
+// texels (a plane nearly along the bundle), and no nearer than the search starts (half a
+// texel). The one-bounce light that the bundles alone carry (strategies bundle, 512 of them, the
+// demo room at 128x72, bundle_size 256) was 7.7% under the reference, 0.2% over with the plane;
+// at bundle_size 1024 without it, 0.2% under: the texels' size, not the estimator.
+// tests/unit/test_bundle_search.c holds it to Embree along x1's own line.
+float rb_bundle_on_own_line(rb_gpu_view v, int size, vec3 x1, float s, rb_bundle_hit h)
+{
+    vec2 ndc = (v.transform * vec4(x1, 1.0)).xy;
+    vec2 centre = (vec2(rb_bundle_texel(v, size, x1)) + 0.5) / float(size) * 2.0 - 1.0;
+    vec2 off = ndc - centre;
+    // The grid's rows in world space (the view's right and up over its half size).
+    vec3 r0 = vec3(v.transform[0].x, v.transform[1].x, v.transform[2].x);
+    vec3 r1 = vec3(v.transform[0].y, v.transform[1].y, v.transform[2].y);
+    vec3 aside = off.x * r0 / dot(r0, r0) + off.y * r1 / dot(r1, r1);
+    float nd = dot(h.n, v.axis.xyz), texel = v.axis.w;
+    float delta = abs(nd) > 1e-4 ? clamp(-dot(h.n, aside) / nd, -2.0 * texel, 2.0 * texel) : 0.0;
+    return max(h.t + s * delta, 0.5 * texel);
+}
+
 #endif
