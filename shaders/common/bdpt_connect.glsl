@@ -270,10 +270,10 @@ float disk_roughness(float rough, float disk, float r2)
 // bundle strategy that makes the same paths (n_o of its samples in this sub-image: bundles for
 // punctual and emitter VPLs, with the balance heuristic; pairs for bounce VPLs, against their
 // parent's (c), with the power heuristic), into the direct (an emitter's point) or indirect
-// accumulators. Indirect light is
-// reflected at x1 with the least roughness, as the bundles reflect it (and wider for a disk that
-// is near, disk_roughness): MIS weighs two estimates of one integrand. With the material's own lobe here, a glossy face seen edge-on (the top of
-// the demo's column in frame 23 at 320x180, n.v = 0.016) took a VPL near its mirror direction:
+// accumulators. Indirect light is reflected at x1 with the least roughness, as the bundles
+// reflect it (and wider for a disk that is near, disk_roughness): MIS weighs two estimates of one
+// integrand. With the material's own lobe here, a glossy face seen edge-on (the top of the
+// demo's column in frame 23 at 320x180, n.v = 0.016) took a VPL near its mirror direction:
 // indirect 27.6 under MIS before the filter (92.5 with VPLs alone), 13.8 in the image, where the
 // reference has 0.8.
 void from_vpl_at_x1(uint j, vec3 x1, vec3 n1, vec3 ng1, vec3 v1, vec3 f0, float f90, float rough,

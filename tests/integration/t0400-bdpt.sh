@@ -102,7 +102,8 @@ check "with 128 samples the indirect relMSE is under 0.05 ($e128)" awk "BEGIN { 
 mr=$(mean "$T/r")
 # Within 5%: the bundles alone read 10% under the reference (0.1682 against 0.1868) while their
 # hits took the depth their node's texel centre has, half the time behind a slanted surface and
-# shadowed from its lights (rb_bundle_on_own_line, common/bundle_search.glsl); 2.9% under on x1's own line.
+# shadowed from its lights; 2.9% under on x1's own line (rb_bundle_on_own_line,
+# common/bundle_search.glsl).
 for s in mis vpl bundle; do
     # shellcheck disable=SC2046
     rb render "$demo" $small $maps --integrator bdpt $(k 128) --out "$T/$s" \

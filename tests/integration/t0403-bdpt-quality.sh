@@ -161,21 +161,6 @@ if have_scene cornell-box/CornellBox.glb; then
     done
     check "the Cornell box is within relMSE 0.0064 of the reference ($eb)" \
         awk "BEGIN { exit !($eb != \"\" && $eb < 0.0064) }"
-    # Fresh samples: every fourth frame has four new caches. Frames 70-73 once held a blotch of
-    # indirect 1.4 to 3.0 on the ceiling beside the light quad (relMSE 0.054), from a bounce's
-    # bounce on the quad's back lighting it as a point through the ceiling's own lobe at a grazing
-    # angle; the others measured 0.0054 to 0.0106.
-    rb render "$box" --integrator bdpt --size 128x128 --frames 0-75 -q --out "$T/cf" \
-        --set integrator.bdpt.samples=fresh
-    expect_exit 0 "bdpt renders the Cornell box's frames 0-75 with fresh samples"
-    worst=0
-    for f in $(seq 7 4 75); do
-        e=$(relmse "$T/cf/frame.$(printf %04d "$f").exr" "$T/cr/frame.0007.exr")
-        worst=$(awk "BEGIN { print ($e > $worst) ? $e : $worst }")
-    done
-    echo "# Cornell box, fresh samples, frames 7 to 75 by 4: worst relMSE $worst"
-    check "no frame of fresh samples holds a blotch (worst relMSE $worst < 0.02)" \
-        awk "BEGIN { exit !($worst < 0.02) }"
     # The short box's front face (28x28 pixels from (64, 88)).
     for im in c/frame.0007 cr/frame.0007; do
         oiiotool "$T/$im.exr" --cut 28x28+64+88 -o "$T/$im.face.exr"
@@ -234,14 +219,26 @@ if have_scene cornell-box/CornellBox.glb; then
     # With fresh samples, frames 4-7 hold sample blocks 4 to 7, in which an emitter point's
     # bounce's bounce lands on the back of the light quad and lights the ceiling 0.9 units away
     # through a connection no bundle can balance (0.049 to 0.055 unbounded).
-    rb render "$box" --integrator bdpt --size 128x128 --frames 0-7 -q --out "$T/f" \
+    rb render "$box" --integrator bdpt --size 128x128 --frames 0-75 -q --out "$T/f" \
         --set integrator.bdpt.samples=fresh
-    expect_exit 0 "bdpt renders the Cornell box with fresh samples"
+    expect_exit 0 "bdpt renders the Cornell box's frames 0-75 with fresh samples"
     for f in 4 5 6 7; do
         e=$(relmse "$T/f/frame.000$f.exr" "$T/cr/frame.0007.exr")
         check "fresh samples, frame $f: within relMSE 0.03 of the reference ($e)" \
             awk "BEGIN { exit !($e != \"\" && $e < 0.03) }"
     done
+    # Every fourth frame has four new caches. Frames 70-73 once held a blotch of indirect 1.4 to
+    # 3.0 on the ceiling beside the light quad (relMSE 0.054), from a bounce's bounce on the
+    # quad's back lighting it as a point through the ceiling's own lobe at a grazing angle; the
+    # others measured 0.0054 to 0.0106.
+    worst=0
+    for f in $(seq 7 4 75); do
+        e=$(relmse "$T/f/frame.$(printf %04d "$f").exr" "$T/cr/frame.0007.exr")
+        worst=$(awk "BEGIN { print ($e > $worst) ? $e : $worst }")
+    done
+    echo "# Cornell box, fresh samples, frames 7 to 75 by 4: worst relMSE $worst"
+    check "no frame of fresh samples holds a blotch (worst relMSE $worst < 0.02)" \
+        awk "BEGIN { exit !($worst < 0.02) }"
     # The classic view (make bench's camera), where the ceiling just behind the light quad's far
     # edge is seen at a grazing angle and its irradiance from the quad's back, 0.9 units below,
     # falls by two orders of magnitude within a pixel: the emitters' closed form taken at the
@@ -250,39 +247,37 @@ if have_scene cornell-box/CornellBox.glb; then
     # with every cache there, 0.0030; with the quad's back points seeing the ceiling, 0.0024;
     # with the emitters' specular light in closed form, 0.0020; with an emitter point's map
     # lifting the point by two texels, not four, 0.0013.
+    # direct_check NAME SCENE LAST BOUND: SCENE at 128x128 rendered by bdpt (frames 0-LAST) into
+    # $T/NAME and by the reference (frame LAST, 1024 samples a pixel), and the direct light's
+    # relMSE between them checked against BOUND.
+    direct_check() {
+        _name=$1 _scene=$2 _last=$(printf %04d "$3") _bound=$4
+        rb render "$_scene" --integrator bdpt --size 128x128 --frames "0-$3" -q --out "$T/$_name"
+        expect_exit 0 "bdpt renders the $_name Cornell box"
+        rb reference "$_scene" --size 128x128 --frames "$3" --spp 1024 -q \
+            --set integrator.reference.paths=bdpt --out "$T/$_name-ref"
+        expect_exit 0 "the reference renders the $_name Cornell box at 1024 samples a pixel"
+        _e=$(relmse "$T/$_name/frame.$_last.exr" "$T/$_name-ref/frame.$_last.exr" direct)
+        echo "# the $_name Cornell box: direct relMSE $_e"
+        check "the $_name box's direct light is within relMSE $_bound of the reference ($_e)" \
+            awk "BEGIN { exit !(\"$_e\" != \"\" && $_e < $_bound) }"
+    }
     classic_cornell "$T/classic.yaml" "$box" 128x128 9 <<EOT
 default_light: off
 integrator: {name: bdpt}
 EOT
-    rb render "$T/classic.yaml" -q --out "$T/cv"
-    expect_exit 0 "bdpt renders the classic view of the Cornell box"
-    rb reference "$T/classic.yaml" --frames 9 --spp 1024 -q \
-        --set integrator.reference.paths=bdpt --out "$T/cvr"
-    expect_exit 0 "the reference renders the classic view at 1024 samples a pixel"
-    ec=$(relmse "$T/cv/frame.0009.exr" "$T/cvr/frame.0009.exr" direct)
-    echo "# Cornell box, classic view: direct relMSE $ec"
-    check "the classic view's direct light is within relMSE 0.0017 of the reference ($ec)" \
-        awk "BEGIN { exit !(\"$ec\" != \"\" && $ec < 0.0017) }"
+    direct_check classic-view "$T/classic.yaml" 9 0.0017
     # metal_box ROUGHNESS NAME: the box in metal of that roughness (its materials' factors
-    # rewritten in place, the same length) as $T/NAME.glb, rendered by bdpt (frames 0-7) and by
-    # the reference (frame 7, 1024 samples a pixel), and the direct light's relMSE between them
-    # checked against 0.0007.
+    # rewritten in place, the same length) as $T/NAME.glb, its direct light checked against
+    # 0.0007 (direct_check, frame 7).
     metal_box() {
-        _r=$1 _name=$2
+        _r=$1
         perl -0777 -pe \
             "s/\"metallicFactor\":0,\"roughnessFactor\":0.5/\"metallicFactor\":1,\"roughnessFactor\":$_r/g" \
-            "$box" >"$T/$_name.glb"
-        check "the $_name box differs from the box in its materials alone" \
-            sh -c "[ \$(cmp -l \"$box\" \"$T/$_name.glb\" | wc -l) -eq 10 ]"
-        rb render "$T/$_name.glb" --integrator bdpt --size 128x128 --frames 0-7 -q --out "$T/$_name"
-        expect_exit 0 "bdpt renders the $_name Cornell box"
-        rb reference "$T/$_name.glb" --size 128x128 --frames 7 --spp 1024 -q \
-            --set integrator.reference.paths=bdpt --out "$T/$_name-ref"
-        expect_exit 0 "the reference renders the $_name Cornell box at 1024 samples a pixel"
-        _e=$(relmse "$T/$_name/frame.0007.exr" "$T/$_name-ref/frame.0007.exr" direct)
-        echo "# the $_name Cornell box: direct relMSE $_e"
-        check "the $_name box's direct light is within relMSE 0.0007 of the reference ($_e)" \
-            awk "BEGIN { exit !(\"$_e\" != \"\" && $_e < 0.0007) }"
+            "$box" >"$T/$2.glb"
+        check "the $2 box differs from the box in its materials alone" \
+            sh -c "[ \$(cmp -l \"$box\" \"$T/$2.glb\" | wc -l) -eq 10 ]"
+        direct_check "$2" "$T/$2.glb" 7 0.0007
     }
     # In metal of roughness 0.1: glossy surfaces take the area light through a narrow lobe, which
     # the emitter points drew a point at a time (direct relMSE 0.0013) and the lobe's fitted
